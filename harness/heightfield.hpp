@@ -1,0 +1,39 @@
+#pragma once
+// A height field sampled on a regular grid of vertices: z(i, j) = height[j * nx + i] at world
+// (origin.x + i * spacing.x, origin.y + j * spacing.y). Gradients are stored per vertex (analytic where
+// the generator has them) so that refraction can use smooth interpolated normals.
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "scene.hpp"
+
+namespace caustics {
+
+struct HeightField {
+    glm::dvec2 origin{0.0};   // world x, y of vertex (0, 0)
+    glm::dvec2 spacing{1.0};  // cell size
+    int nx = 0;               // vertices along x
+    int ny = 0;               // vertices along y
+    bool periodic = false;    // the surface tiles (noise generator): vertex nx-1 equals vertex 0 again
+    std::vector<float> height;            // world z, nx * ny
+    std::vector<glm::vec2> gradient;      // (dz/dx, dz/dy), nx * ny
+
+    float z(int i, int j) const { return height[static_cast<std::size_t>(j) * nx + i]; }
+    glm::vec2 grad(int i, int j) const { return gradient[static_cast<std::size_t>(j) * nx + i]; }
+    glm::dvec2 extent() const { return {spacing.x * (nx - 1), spacing.y * (ny - 1)}; }
+    bool contains(double x, double y) const;
+    // Bilinear interpolation of height and gradient at world (x, y), clamped to the domain.
+    double sample_height(double x, double y) const;
+    glm::dvec2 sample_gradient(double x, double y) const;
+    // Upward unit normal (-gx, -gy, 1) / |.| from the interpolated gradient.
+    glm::dvec3 sample_normal(double x, double y) const;
+    // Two triangles per cell, counter-clockwise seen from above, with per-vertex upward normals.
+    TriangleMesh triangulate() const;
+};
+
+// Evaluates the height-field generator of `desc` at time t (seconds) for animation frame `frame`
+// (the `waves` simulation steps deterministically to that frame). Same result on every machine.
+HeightField generate_heightfield(const HeightFieldDesc& desc, double time, int frame, double fps);
+
+}  // namespace caustics

@@ -1,0 +1,79 @@
+#pragma once
+// The plugin interface every caustics method implements (DESIGN.md section 4).
+//
+// Life cycle, as the harness drives it (DESIGN.md section 6):
+//   auto m = info.create(params);           // parameters already validated against info.params
+//   m->capabilities(scene)                  // supported, or a human-readable reason
+//   m->prepare(scene)                       // once per scene: timed, reported as prepare_ms
+//   per frame: m->update(frame)             // dynamic-geometry work: timed, update_ms
+//              m->render(frame, request)    // timed; warm-up then repeats
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "camera.hpp"
+#include "frame.hpp"
+#include "image.hpp"
+#include "params.hpp"
+#include "receiver_chart.hpp"
+
+namespace caustics {
+
+struct Capability {
+    bool supported = true;
+    std::string reason;   // why not, when unsupported
+    static Capability yes() { return {}; }
+    static Capability no(std::string why) { return {false, std::move(why)}; }
+};
+
+// Health counters are data, not logs. Conventional names (use them where they apply):
+//   nonfinite        values that came out NaN/Inf (the harness also counts them in the output)
+//   lost_samples     estimator lookups that fell off the receiver, refracted rays that missed it
+//   not_converged    iterative estimates that did not converge
+//   clamped          steps or values clamped to stay finite
+//   not_covered      requested receiver points the method cannot shade (e.g. walls)
+struct Health {
+    std::map<std::string, std::int64_t> counters;
+    void add(const std::string& name, std::int64_t n = 1) { counters[name] += n; }
+    std::int64_t get(const std::string& name) const {
+        auto it = counters.find(name);
+        return it == counters.end() ? 0 : it->second;
+    }
+};
+
+struct RenderRequest {
+    const ReceiverChart* receiver = nullptr;     // fill CausticOutput::receiver when non-null
+    const CameraGBuffer* camera = nullptr;       // fill CausticOutput::camera when non-null
+};
+
+struct CausticOutput {
+    Image receiver;       // chart width x height, 1 channel, E_c [W/m^2] (relative if not radiometric)
+    Image receiver_rgb;   // optional colour version (dispersion), 3 channels
+    Image camera;         // gbuffer width x height, 1 channel; only covered pixels are read
+    std::map<std::string, Image> debug;                  // optional: caustic map, overlays
+    std::vector<std::pair<std::string, double>> stages_ms;  // optional per-stage timings of render()
+    Health health;
+};
+
+class Method {
+public:
+    virtual ~Method() = default;
+    virtual Capability capabilities(const Scene& scene) const { return Capability::yes(); }
+    virtual void prepare(const Scene& scene) {}
+    virtual void update(const FrameGeometry& frame) {}
+    virtual CausticOutput render(const FrameGeometry& frame, const RenderRequest& request) = 0;
+};
+
+struct MethodInfo {
+    std::string name;
+    std::string doc;
+    bool radiometric = true;        // false: output is relative; metrics add a least-squares fit
+    std::vector<ParamSpec> params;  // must contain `grid` and `iterations`
+    std::function<std::unique_ptr<Method>(const ParamSet&)> create;
+};
+
+}  // namespace caustics
