@@ -2,6 +2,7 @@
 // A height field sampled on a regular grid of vertices: z(i, j) = height[j * nx + i] at world
 // (origin.x + i * spacing.x, origin.y + j * spacing.y). Gradients are stored per vertex (analytic where
 // the generator has them) so that refraction can use smooth interpolated normals.
+#include <functional>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -18,12 +19,16 @@ struct HeightField {
     bool periodic = false;    // the surface tiles (noise generator): vertex nx-1 equals vertex 0 again
     std::vector<float> height;            // world z, nx * ny
     std::vector<glm::vec2> gradient;      // (dz/dx, dz/dy), nx * ny
+    // Analytic generators (flat, sine, gaussian) also give the exact gradient at any (x, y), so the
+    // reference refracts with the true normal rather than an interpolated one. Empty otherwise.
+    std::function<glm::dvec2(double x, double y)> exact_gradient;
 
     float z(int i, int j) const { return height[static_cast<std::size_t>(j) * nx + i]; }
     glm::vec2 grad(int i, int j) const { return gradient[static_cast<std::size_t>(j) * nx + i]; }
     glm::dvec2 extent() const { return {spacing.x * (nx - 1), spacing.y * (ny - 1)}; }
     bool contains(double x, double y) const;
-    // Bilinear interpolation of height and gradient at world (x, y), clamped to the domain.
+    // Bilinear interpolation of height and gradient at world (x, y), clamped to the domain (periodic
+    // fields wrap); sample_gradient uses exact_gradient when present.
     double sample_height(double x, double y) const;
     glm::dvec2 sample_gradient(double x, double y) const;
     // Upward unit normal (-gx, -gy, 1) / |.| from the interpolated gradient.
