@@ -62,9 +62,9 @@ struct CausticOutput {
 class Method {
 public:
     virtual ~Method() = default;
-    virtual Capability capabilities(const Scene& scene) const { return Capability::yes(); }
-    virtual void prepare(const Scene& scene) {}
-    virtual void update(const FrameGeometry& frame) {}
+    virtual Capability capabilities(const Scene& /*scene*/) const { return Capability::yes(); }
+    virtual void prepare(const Scene& /*scene*/) {}
+    virtual void update(const FrameGeometry& /*frame*/) {}
     virtual CausticOutput render(const FrameGeometry& frame, const RenderRequest& request) = 0;
 };
 
