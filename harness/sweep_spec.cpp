@@ -1,0 +1,264 @@
+#include "sweep_spec.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <set>
+#include <sstream>
+
+#include "errors.hpp"
+#include "registry.hpp"
+
+namespace caustics {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+// nlohmann keeps the last of duplicate keys silently; a duplicated axis is almost always a mistake in
+// a hand-written spec, so the parser callback rejects it with the key path.
+json parse_rejecting_duplicates(const std::string& text, const std::string& file) {
+    std::vector<std::set<std::string>> seen;
+    std::vector<std::string> path;
+    auto callback = [&](int /*depth*/, json::parse_event_t event, json& parsed) {
+        switch (event) {
+        case json::parse_event_t::object_start: seen.emplace_back(); break;
+        case json::parse_event_t::object_end: seen.pop_back(); break;
+        case json::parse_event_t::key: {
+            const std::string key = parsed.get<std::string>();
+            if (!seen.back().insert(key).second) throw InputError(file, key, "duplicate key");
+            break;
+        }
+        default: break;
+        }
+        return true;
+    };
+    try {
+        return json::parse(text, callback);
+    } catch (const json::parse_error& e) {
+        throw InputError(file, "", std::string("not valid JSON: ") + e.what());
+    }
+}
+
+void check_keys(const json& object, const std::set<std::string>& valid, const std::string& file,
+                const std::string& where) {
+    for (const auto& [key, value] : object.items()) {
+        if (valid.count(key)) continue;
+        std::string list;
+        for (const auto& v : valid) list += (list.empty() ? "" : ", ") + v;
+        throw InputError(file, where.empty() ? key : where + "." + key, "unknown key; valid keys: " + list);
+    }
+}
+
+long long require_integer(const json& v, const std::string& file, const std::string& key, long long lo,
+                          long long hi) {
+    if (!v.is_number() || (v.is_number_float() && std::floor(v.get<double>()) != v.get<double>()))
+        throw InputError(file, key, "must be an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    double d = v.get<double>();
+    if (d < static_cast<double>(lo) || d > static_cast<double>(hi))
+        throw InputError(file, key, "must be an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    return v.get<long long>();
+}
+
+std::string resolve_scene(const std::string& entry, const std::string& file, const std::string& key) {
+    std::vector<fs::path> candidates;
+    const bool looks_like_path = entry.find('/') != std::string::npos || fs::path(entry).extension() == ".json";
+    if (looks_like_path) {
+        candidates.push_back(entry);
+        candidates.push_back(fs::path(file).parent_path() / entry);
+    } else {
+        candidates.push_back(fs::path("scenes") / (entry + ".json"));
+        candidates.push_back(fs::path(CAUSTICS_SOURCE_DIR) / "scenes" / (entry + ".json"));
+    }
+    for (const auto& c : candidates)
+        if (fs::is_regular_file(c)) return c.lexically_normal().string();
+    throw InputError(file, key, "unknown scene '" + entry + "': no file " + candidates.front().string());
+}
+
+std::string canonical_value(const json& v) {
+    if (v.is_string()) return v.get<std::string>();
+    if (v.is_boolean()) return v.get<bool>() ? "true" : "false";
+    if (v.is_number_integer() || v.is_number_unsigned()) return v.dump();
+    std::ostringstream s;
+    s.precision(15);
+    s << v.get<double>();
+    return s.str();
+}
+
+// Type check of one axis value against the parameter's declared type (ranges are the run's business).
+void check_axis_type(const ParamSpec& spec, const json& v, const std::string& file, const std::string& key) {
+    bool ok = false;
+    switch (spec.type) {
+    case ParamType::Int: ok = v.is_number() && std::floor(v.get<double>()) == v.get<double>(); break;
+    case ParamType::Float: ok = v.is_number(); break;
+    case ParamType::Bool: ok = v.is_boolean(); break;
+    case ParamType::Enum: ok = v.is_string(); break;
+    }
+    if (!ok)
+        throw InputError(file, key, "value " + v.dump() + " is not a " + to_string(spec.type) +
+                                        "; valid: " + spec.valid_text());
+}
+
+std::string safe_token(const std::string& s) {
+    std::string out;
+    for (char c : s) out += (std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '-') ? c : '_';
+    return out;
+}
+
+}  // namespace
+
+std::vector<json> expand_axis_values(const json& value, const std::string& file, const std::string& key) {
+    std::vector<json> out;
+    if (value.is_array()) {
+        for (const auto& v : value) {
+            if (!v.is_primitive() || v.is_null())
+                throw InputError(file, key, "axis values must be numbers, strings or booleans");
+            out.push_back(v);
+        }
+    } else if (value.is_object() && value.size() == 1 && value.contains("range")) {
+        const json& r = value["range"];
+        if (!r.is_array() || r.size() != 3 || !r[0].is_number() || !r[1].is_number() || !r[2].is_number())
+            throw InputError(file, key + ".range", "must be [start, stop, step] numbers");
+        const double start = r[0].get<double>(), stop = r[1].get<double>(), step = r[2].get<double>();
+        if (step == 0.0 || (stop - start) * step < 0.0 || !std::isfinite(start + stop + step))
+            throw InputError(file, key + ".range", "step must be non-zero and lead from start to stop");
+        const bool integral = r[0].is_number_integer() && r[1].is_number_integer() && r[2].is_number_integer();
+        const long long count = static_cast<long long>(std::floor((stop - start) / step + 1e-9)) + 1;
+        if (count > 100000) throw InputError(file, key + ".range", "more than 100000 values");
+        for (long long i = 0; i < count; ++i) {
+            if (integral) out.push_back(r[0].get<long long>() + i * r[2].get<long long>());
+            else out.push_back(start + static_cast<double>(i) * step);
+        }
+    } else if (value.is_object() && value.size() == 1 && value.contains("pow2")) {
+        const json& r = value["pow2"];
+        auto is_pow2 = [](const json& v) {
+            return v.is_number_integer() && v.get<long long>() > 0 && (v.get<long long>() & (v.get<long long>() - 1)) == 0;
+        };
+        if (!r.is_array() || r.size() != 2 || !is_pow2(r[0]) || !is_pow2(r[1]) || r[0].get<long long>() > r[1].get<long long>())
+            throw InputError(file, key + ".pow2", "must be [lo, hi] with lo <= hi both powers of two (e.g. [32, 512])");
+        for (long long v = r[0].get<long long>(); v <= r[1].get<long long>(); v *= 2) out.push_back(v);
+    } else {
+        throw InputError(file, key, "an axis is a list of values, {\"range\": [start, stop, step]} or {\"pow2\": [lo, hi]}");
+    }
+    if (out.empty()) throw InputError(file, key, "empty axis: give at least one value");
+    return out;
+}
+
+SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string>& axis_overrides) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw InputError(path, "", "cannot read sweep spec (missing or unreadable file)");
+    std::stringstream buffer;
+    buffer << in.rdbuf();
+    json root = parse_rejecting_duplicates(buffer.str(), path);
+    if (!root.is_object()) throw InputError(path, "", "a sweep spec is a JSON object");
+    check_keys(root, {"description", "scenes", "frames", "reference", "timing", "methods"}, path, "");
+
+    // Command-line axes replace or add axes before validation, so they are checked like the file.
+    for (const auto& text : axis_overrides) {
+        const auto eq = text.find('='), dot = text.find('.');
+        if (eq == std::string::npos || dot == std::string::npos || dot > eq)
+            throw InputError("--axis", text, "expected METHOD.AXIS=VALUES, e.g. caustic_mapping.iterations=[1,2,4]");
+        const std::string method = text.substr(0, dot), axis = text.substr(dot + 1, eq - dot - 1);
+        json values;
+        try {
+            values = json::parse(text.substr(eq + 1));
+        } catch (const json::parse_error&) {
+            throw InputError("--axis", text, "VALUES must be JSON: [1,2,4], {\"range\":[1,5,1]} or {\"pow2\":[32,256]}");
+        }
+        if (!values.is_array() && !values.is_object()) values = json::array({values});
+        root["methods"][method][axis] = values;
+    }
+
+    SweepSpec spec;
+    spec.path = path;
+    spec.as_run = root;
+    if (root.contains("description")) {
+        if (!root["description"].is_string()) throw InputError(path, "description", "must be a string");
+        spec.description = root["description"].get<std::string>();
+    }
+    if (!root.contains("scenes") || !root["scenes"].is_array() || root["scenes"].empty())
+        throw InputError(path, "scenes", "must be a non-empty list of scene names or paths");
+    for (std::size_t i = 0; i < root["scenes"].size(); ++i) {
+        const std::string key = "scenes[" + std::to_string(i) + "]";
+        if (!root["scenes"][i].is_string()) throw InputError(path, key, "must be a scene name or path");
+        spec.scenes.push_back(resolve_scene(root["scenes"][i].get<std::string>(), path, key));
+    }
+    if (root.contains("frames")) {
+        spec.frames.clear();
+        for (const json& f : expand_axis_values(root["frames"], path, "frames"))
+            spec.frames.push_back(static_cast<int>(require_integer(f, path, "frames", 0, 1000000)));
+    }
+    if (root.contains("reference")) {
+        const json& r = root["reference"];
+        if (!r.is_object()) throw InputError(path, "reference", "must be an object {\"photons\": N, \"seed\": S}");
+        check_keys(r, {"photons", "seed"}, path, "reference");
+        if (r.contains("photons")) spec.photons = static_cast<std::uint64_t>(require_integer(r["photons"], path, "reference.photons", 1000, 100'000'000'000LL));
+        if (r.contains("seed")) spec.seed = static_cast<std::uint64_t>(require_integer(r["seed"], path, "reference.seed", 0, 1LL << 62));
+    }
+    if (root.contains("timing")) {
+        const json& t = root["timing"];
+        if (!t.is_object()) throw InputError(path, "timing", "must be an object {\"warmup\": W, \"repeats\": R}");
+        check_keys(t, {"warmup", "repeats"}, path, "timing");
+        if (t.contains("warmup")) spec.warmup = static_cast<int>(require_integer(t["warmup"], path, "timing.warmup", 0, 10000));
+        if (t.contains("repeats")) spec.repeats = static_cast<int>(require_integer(t["repeats"], path, "timing.repeats", 1, 100000));
+    }
+    if (!root.contains("methods") || !root["methods"].is_object() || root["methods"].empty())
+        throw InputError(path, "methods", "must be a non-empty object {method: {axis: values}}");
+    for (const auto& [name, axes] : root["methods"].items()) {
+        const MethodInfo& info = require_method(name, path + ": methods." + name);
+        if (!axes.is_object()) throw InputError(path, "methods." + name, "must be an object {axis: values}");
+        SweepMethod m{name, {}};
+        for (const auto& [axis, values] : axes.items()) {
+            const std::string key = "methods." + name + "." + axis;
+            const ParamSpec* param = nullptr;
+            for (const auto& p : info.params)
+                if (p.name == axis) param = &p;
+            if (!param) {
+                std::string known;
+                for (const auto& p : info.params) known += (known.empty() ? "" : ", ") + p.name;
+                throw InputError(path, key, "unknown axis; parameters of " + name + ": " + known);
+            }
+            SweepAxis a{axis, {}};
+            for (const json& v : expand_axis_values(values, path, key)) {
+                check_axis_type(*param, v, path, key);
+                a.values.push_back(canonical_value(v));
+            }
+            m.axes.push_back(std::move(a));
+        }
+        spec.methods.push_back(std::move(m));
+    }
+    return spec;
+}
+
+std::vector<PlannedRun> plan_runs(const SweepSpec& spec) {
+    std::vector<PlannedRun> runs;
+    for (const auto& scene_path : spec.scenes) {
+        const std::string scene_name = fs::path(scene_path).stem().string();
+        for (int frame : spec.frames) {
+            for (const auto& m : spec.methods) {
+                // Odometer over the axes, last axis fastest.
+                std::vector<std::size_t> index(m.axes.size(), 0);
+                while (true) {
+                    PlannedRun run;
+                    run.scene_path = scene_path;
+                    run.scene_name = scene_name;
+                    run.frame = frame;
+                    run.method = m.method;
+                    run.id = safe_token(scene_name) + "-f" + std::to_string(frame) + "-" + safe_token(m.method);
+                    for (std::size_t a = 0; a < m.axes.size(); ++a) {
+                        run.params[m.axes[a].name] = m.axes[a].values[index[a]];
+                        run.id += "-" + safe_token(m.axes[a].name) + "=" + safe_token(m.axes[a].values[index[a]]);
+                    }
+                    runs.push_back(std::move(run));
+                    std::size_t a = m.axes.size();
+                    while (a > 0 && ++index[a - 1] == m.axes[a - 1].values.size()) index[--a] = 0;
+                    if (a == 0) break;
+                }
+            }
+        }
+    }
+    return runs;
+}
+
+}  // namespace caustics

@@ -1,0 +1,75 @@
+#pragma once
+// Sweep specifications (issue "Sweeps and paper outputs"): which scenes, frames and methods to run, and
+// for each method its named axes, whose Cartesian product is the set of runs (nvbench-style axes).
+//
+// {
+//   "description": "free text",
+//   "scenes": ["pool", "scenes/sine.json"],      // a name in scenes/ or a path
+//   "frames": [0, 10] | {"range": [0, 30, 10]},
+//   "reference": {"photons": 2000000, "seed": 1},
+//   "timing": {"warmup": 2, "repeats": 5},
+//   "methods": {
+//     "caustic_triangles": {"grid": {"pow2": [32, 256]}},
+//     "caustic_mapping":   {"grid": [64, 128], "iterations": {"range": [1, 5, 1]},
+//                           "estimator": ["approx", "newton"]}
+//   }
+// }
+//
+// Axis values: a list of scalars; {"range": [start, stop, step]} (stop included when reached);
+// {"pow2": [lo, hi]} (every power of two from lo to hi, both powers of two). Axes are checked against the
+// method's parameter table when the spec is read (unknown axis, wrong type, empty axis: InputError);
+// values outside a parameter's range are not an error of the spec: that run is recorded as skipped.
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace caustics {
+
+struct SweepAxis {
+    std::string name;
+    std::vector<std::string> values;   // canonical text of each value, in order
+};
+
+struct SweepMethod {
+    std::string method;
+    std::vector<SweepAxis> axes;       // in the order the spec lists them
+};
+
+struct SweepSpec {
+    std::string path;
+    std::string description;
+    std::vector<std::string> scenes;   // resolved scene file paths
+    std::vector<int> frames{0};
+    std::uint64_t photons = 2'000'000;
+    std::uint64_t seed = 1;
+    int warmup = 2;
+    int repeats = 5;
+    std::vector<SweepMethod> methods;
+    nlohmann::json as_run;             // the spec after command-line overrides (the manifest records it)
+};
+
+// One run of the Cartesian product.
+struct PlannedRun {
+    std::string id;                    // stable, file-name safe, unique within the sweep
+    std::string scene_path;
+    std::string scene_name;
+    int frame = 0;
+    std::string method;
+    std::map<std::string, std::string> params;   // the axis values of this run
+};
+
+// Reads a spec and applies `axis_overrides` ("method.axis=<json value>", from --axis). Throws InputError
+// naming the file and key for every malformed input.
+SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string>& axis_overrides = {});
+
+// The runs in a fixed order: scene, frame, method, then the axes' Cartesian product (last axis fastest).
+std::vector<PlannedRun> plan_runs(const SweepSpec& spec);
+
+// Expands one axis value description (list, range or pow2). `key` names it in messages.
+std::vector<nlohmann::json> expand_axis_values(const nlohmann::json& value, const std::string& file,
+                                               const std::string& key);
+
+}  // namespace caustics

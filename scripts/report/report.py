@@ -1,0 +1,81 @@
+#!/usr/bin/env python3
+"""Writes DIR/report.md, DIR/figures/*.png|pdf and DIR/tables/*.tex|md from a sweep directory.
+
+Usage: report.py DIR   (normally run through `caustics report DIR`)
+Needs Debian's python3-matplotlib, python3-pandas, python3-numpy and python3-openimageio.
+"""
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+try:
+    import matplotlib  # noqa: F401
+    import numpy  # noqa: F401
+    import pandas  # noqa: F401
+except ImportError as error:  # say which module is missing and where it comes from
+    sys.exit(f"report: python module missing ({error.name}); install Debian's python3-{error.name} "
+             f"(scripts/setup.sh does) and run with /usr/bin/python3")
+
+import figures  # noqa: E402
+import tables  # noqa: E402
+from load import read_manifest, read_results  # noqa: E402
+
+
+def context_line(manifest):
+    host = manifest.get("host", {})
+    return (f"Machine: {host.get('cpu', '?')}, {host.get('cores', '?')} cores, "
+            f"{manifest.get('threads', '?')} threads, {manifest.get('build_type', '?')} build, "
+            f"commit {manifest.get('git_commit', '?')}.")
+
+
+def main(argv):
+    if len(argv) != 2:
+        sys.exit("usage: report.py SWEEP_DIR")
+    sweep_dir = argv[1]
+    frame = read_results(sweep_dir)
+    manifest = read_manifest(sweep_dir)
+    settings = (manifest.get("spec") or {}).get("report", {})
+    budget = float(settings.get("time_budget_ms", 16.7))
+    target = float(settings.get("error_target", 0.1))
+    paper = settings.get("paper_settings", {})
+    chosen = settings.get("image_settings", paper)
+    fig_dir = os.path.join(sweep_dir, "figures")
+    tab_dir = os.path.join(sweep_dir, "tables")
+    os.makedirs(fig_dir, exist_ok=True)
+    os.makedirs(tab_dir, exist_ok=True)
+    context = context_line(manifest)
+
+    out = [f"# Sweep report: {os.path.basename(os.path.abspath(sweep_dir))}", "", context, ""]
+    counts = frame["status"].value_counts().to_dict()
+    out.append("Runs: " + ", ".join(f"{v} {k}" for k, v in sorted(counts.items())) + ".")
+    out.append("Errors are receiver-map nrmse against the Embree reference of the same frame; methods "
+               "marked (fit) are non-radiometric and shown after a least-squares scale fit.")
+    out.append("")
+    for scene in sorted(frame["scene"].unique()):
+        out += [f"## {scene}", ""]
+        for make in (figures.time_vs_error, figures.error_vs_iterations, figures.fps_vs_grid):
+            paths = make(frame, scene, fig_dir)
+            if paths:
+                out.append(f"![{os.path.basename(paths[0])}](figures/{os.path.basename(paths[0])})")
+        paths = figures.image_grid(frame, scene, fig_dir, sweep_dir, chosen)
+        if paths:
+            out.append(f"![{os.path.basename(paths[0])}](figures/{os.path.basename(paths[0])})")
+        out.append("")
+        table = tables.write_tables(frame, scene, tab_dir, budget, target, paper, context)
+        if table:
+            out += [table, ""]
+    not_ok = frame[frame["status"] != "ok"]
+    if not not_ok.empty:
+        out += ["## Runs that did not complete", "", "| run | status | message |", "|---|---|---|"]
+        out += [f"| {r.run_id} | {r.status} | {str(r.message).replace('|', '/')} |" for r in not_ok.itertuples()]
+        out.append("")
+    path = os.path.join(sweep_dir, "report.md")
+    with open(path + ".tmp", "w") as f:
+        f.write("\n".join(out) + "\n")
+    os.replace(path + ".tmp", path)
+    print(path)
+
+
+if __name__ == "__main__":
+    main(sys.argv)
