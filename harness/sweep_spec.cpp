@@ -152,7 +152,7 @@ SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string
     buffer << in.rdbuf();
     json root = parse_rejecting_duplicates(buffer.str(), path);
     if (!root.is_object()) throw InputError(path, "", "a sweep spec is a JSON object");
-    check_keys(root, {"description", "scenes", "frames", "reference", "timing", "methods"}, path, "");
+    check_keys(root, {"description", "scenes", "frames", "reference", "timing", "methods", "report"}, path, "");
 
     // Command-line axes replace or add axes before validation, so they are checked like the file.
     for (const auto& text : axis_overrides) {
@@ -173,6 +173,8 @@ SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string
     SweepSpec spec;
     spec.path = path;
     spec.as_run = root;
+    if (root.contains("report") && !root["report"].is_object())
+        throw InputError(path, "report", "must be an object of report settings (see scripts/report/report.py)");
     if (root.contains("description")) {
         if (!root["description"].is_string()) throw InputError(path, "description", "must be a string");
         spec.description = root["description"].get<std::string>();
@@ -199,9 +201,14 @@ SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string
     if (root.contains("timing")) {
         const json& t = root["timing"];
         if (!t.is_object()) throw InputError(path, "timing", "must be an object {\"warmup\": W, \"repeats\": R}");
-        check_keys(t, {"warmup", "repeats"}, path, "timing");
+        check_keys(t, {"warmup", "repeats", "timeout_s"}, path, "timing");
         if (t.contains("warmup")) spec.warmup = static_cast<int>(require_integer(t["warmup"], path, "timing.warmup", 0, 10000));
         if (t.contains("repeats")) spec.repeats = static_cast<int>(require_integer(t["repeats"], path, "timing.repeats", 1, 100000));
+        if (t.contains("timeout_s")) {
+            if (!t["timeout_s"].is_number() || t["timeout_s"].get<double>() < 0.0)
+                throw InputError(path, "timing.timeout_s", "must be a number of seconds >= 0 (0: no limit)");
+            spec.timeout_s = t["timeout_s"].get<double>();
+        }
     }
     if (!root.contains("methods") || !root["methods"].is_object() || root["methods"].empty())
         throw InputError(path, "methods", "must be a non-empty object {method: {axis: values}}");

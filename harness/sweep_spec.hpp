@@ -7,7 +7,8 @@
 //   "scenes": ["pool", "scenes/sine.json"],      // a name in scenes/ or a path
 //   "frames": [0, 10] | {"range": [0, 30, 10]},
 //   "reference": {"photons": 2000000, "seed": 1},
-//   "timing": {"warmup": 2, "repeats": 5},
+//   "timing": {"warmup": 2, "repeats": 5, "timeout_s": 600},
+//   "report": {...},                             // settings for `caustics report` (scripts/report)
 //   "methods": {
 //     "caustic_triangles": {"grid": {"pow2": [32, 256]}},
 //     "caustic_mapping":   {"grid": [64, 128], "iterations": {"range": [1, 5, 1]},
@@ -35,7 +36,7 @@ struct SweepAxis {
 
 struct SweepMethod {
     std::string method;
-    std::vector<SweepAxis> axes;       // in the order the spec lists them
+    std::vector<SweepAxis> axes;       // sorted by name (JSON objects are unordered)
 };
 
 struct SweepSpec {
@@ -47,6 +48,7 @@ struct SweepSpec {
     std::uint64_t seed = 1;
     int warmup = 2;
     int repeats = 5;
+    double timeout_s = 0.0;            // per-run limit (0: none); a run past it is recorded as failed
     std::vector<SweepMethod> methods;
     nlohmann::json as_run;             // the spec after command-line overrides (the manifest records it)
 };
@@ -65,7 +67,8 @@ struct PlannedRun {
 // naming the file and key for every malformed input.
 SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string>& axis_overrides = {});
 
-// The runs in a fixed order: scene, frame, method, then the axes' Cartesian product (last axis fastest).
+// The runs in a fixed order: scene, frame, method (by name), then the Cartesian product of the axes
+// (sorted by name; the last one varies fastest).
 std::vector<PlannedRun> plan_runs(const SweepSpec& spec);
 
 // Expands one axis value description (list, range or pow2). `key` names it in messages.

@@ -1,0 +1,19 @@
+#pragma once
+// Loading glTF 2.0 (.gltf) and binary glTF (.glb) files into one triangle mesh.
+#include <string>
+#include <vector>
+
+#include "mesh.hpp"
+
+namespace caustics {
+
+// All triangle primitives of all meshes reachable from the default scene (the first scene when none
+// is marked default, every mesh when the file has no scenes), with node transforms applied: POSITION,
+// NORMAL when every primitive has it (else normals are left empty), indices of any integer type
+// (non-indexed primitives too). Triangle strips and fans are converted to lists; points and lines are
+// skipped. Throws std::runtime_error with tinygltf's message on an unreadable or malformed file.
+// `dependencies`, when given, receives the paths of the external files the glTF reads (.bin buffers),
+// so that cache keys can hash them too.
+TriangleMesh load_gltf_mesh(const std::string& path, std::vector<std::string>* dependencies = nullptr);
+
+}  // namespace caustics

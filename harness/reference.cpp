@@ -1,0 +1,515 @@
+// The reference light tracer (DESIGN.md section 5). See reference.hpp for the contract.
+//
+// Determinism: photon k draws its random numbers only from a counter-based generator keyed by
+// (seed, k, dimension); deposits are summed as 64-bit fixed-point integers (associative), and the flux
+// ledger is summed per fixed batch of photons and then over batches in batch order. The result is
+// therefore bit-identical for any thread count and scheduling.
+//
+// Noise: photon k contributes X_k = N w_k / A to the bin it lands in (0 elsewhere); E = mean(X_k) and
+// se^2 = (sum X_k^2 / N - E^2) / (N - 1). One photon deposits at most once (it stops at the first
+// diffuse surface, and Fresnel splitting is done by Russian roulette), so per-bin sums of w and w^2
+// are exactly the needed moments.
+//
+// Bump kReferenceVersion (reference_cache.cpp) whenever the transport or the estimators change.
+#include "reference.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <numbers>
+#include <stdexcept>
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include "hash.hpp"
+#include "progress.hpp"
+#include "ray_offset.hpp"
+#include "ray_tracer.hpp"
+#include "reference_rays.hpp"
+
+namespace caustics {
+namespace {
+
+constexpr std::uint64_t kBatchSize = 65536;
+// One photon's normalised weight (<= 1) becomes an integer of at most 2^30: 1e9 photons in one bin
+// stay below 2^60, and each contribution keeps ~2^-30 relative precision.
+constexpr double kFixedScale = 1073741824.0;  // 2^30
+
+// Counter-based random numbers: value (seed, photon, dimension) -> [0, 1). mix64 is a bijection, so
+// distinct photons get distinct, decorrelated states.
+class PhotonRandom {
+public:
+    PhotonRandom(std::uint64_t seed, std::uint64_t photon)
+        : state_(mix64(mix64(seed) + photon * 0xD1B54A32D192ED03ull)) {}
+    double next() {
+        const std::uint64_t h = mix64(state_ + (++dimension_) * 0x9E3779B97F4A7C15ull);
+        return static_cast<double>(h >> 11) * 0x1.0p-53;
+    }
+
+private:
+    std::uint64_t state_;
+    std::uint64_t dimension_ = 0;
+};
+
+void orthonormal_basis(const glm::dvec3& n, glm::dvec3& a, glm::dvec3& b) {
+    // Duff et al. 2017, "Building an Orthonormal Basis, Revisited".
+    const double sign = std::copysign(1.0, n.z);
+    const double s = -1.0 / (sign + n.z);
+    const double t = n.x * n.y * s;
+    a = {1.0 + sign * n.x * n.x * s, sign * t, -sign * n.x};
+    b = {t, sign + n.y * n.y * s, -n.y};
+}
+
+// Where photons of one light start and how much flux each carries.
+struct Emitter {
+    LightType type = LightType::Directional;
+    glm::dvec3 direction{0, 0, -1}, axis_a{1, 0, 0}, axis_b{0, 1, 0};
+    glm::dvec3 corner{0.0};            // directional: rectangle origin
+    double extent_a = 0, extent_b = 0; // directional: rectangle sides
+    glm::dvec3 position{0.0};          // point light
+    double cos_max = -1.0;             // point light: cone half-angle cosine (-1 = full sphere)
+    double power = 0.0;                // total flux this light sends through the sampled domain [W]
+    double flux_per_photon = 0.0;
+
+    void sample(double u1, double u2, glm::dvec3& origin, glm::dvec3& dir) const {
+        if (type == LightType::Directional) {
+            origin = corner + (u1 * extent_a) * axis_a + (u2 * extent_b) * axis_b;
+            dir = direction;
+        } else {
+            const double cos_t = 1.0 - u1 * (1.0 - cos_max);
+            const double sin_t = std::sqrt(std::max(0.0, 1.0 - cos_t * cos_t));
+            const double phi = 2.0 * std::numbers::pi * u2;
+            origin = position;
+            dir = glm::normalize(cos_t * direction + sin_t * (std::cos(phi) * axis_a + std::sin(phi) * axis_b));
+        }
+    }
+};
+
+Emitter make_emitter(const Light& light, const FrameGeometry& frame) {
+    Emitter e;
+    e.type = light.type;
+    Bounds3 target = frame.specular_bounds.valid() ? frame.specular_bounds : frame.receiver().bounds;
+    if (!target.valid()) target = frame.scene_bounds;
+    const glm::dvec3 lo = target.lo, hi = target.hi;
+    const double size = std::max(1e-6, glm::length(hi - lo));
+    if (light.type == LightType::Directional) {
+        e.direction = glm::normalize(light.direction);
+        orthonormal_basis(e.direction, e.axis_a, e.axis_b);
+        double amin = 1e300, amax = -1e300, bmin = 1e300, bmax = -1e300;
+        for (int k = 0; k < 8; ++k) {
+            const glm::dvec3 c((k & 1) ? hi.x : lo.x, (k & 2) ? hi.y : lo.y, (k & 4) ? hi.z : lo.z);
+            amin = std::min(amin, glm::dot(c, e.axis_a));
+            amax = std::max(amax, glm::dot(c, e.axis_a));
+            bmin = std::min(bmin, glm::dot(c, e.axis_b));
+            bmax = std::max(bmax, glm::dot(c, e.axis_b));
+        }
+        // A small margin so that silhouettes are not clipped by round-off.
+        const double margin = 1e-4 * size;
+        amin -= margin, amax += margin, bmin -= margin, bmax += margin;
+        // Start behind every object of the scene along the light direction.
+        const Bounds3& all = frame.scene_bounds.valid() ? frame.scene_bounds : target;
+        double dmin = 1e300;
+        for (int k = 0; k < 8; ++k) {
+            const glm::dvec3 c((k & 1) ? all.hi.x : all.lo.x, (k & 2) ? all.hi.y : all.lo.y,
+                               (k & 4) ? all.hi.z : all.lo.z);
+            dmin = std::min(dmin, glm::dot(c, e.direction));
+        }
+        dmin -= 0.01 * size + 1e-3;
+        e.corner = dmin * e.direction + amin * e.axis_a + bmin * e.axis_b;
+        e.extent_a = amax - amin;
+        e.extent_b = bmax - bmin;
+        e.power = light.irradiance * e.extent_a * e.extent_b;
+    } else {
+        e.position = light.position;
+        const glm::dvec3 center = 0.5 * (lo + hi);
+        const double radius = 0.5 * glm::length(hi - lo) * (1.0 + 1e-4) + 1e-6;
+        const double dist = glm::length(center - light.position);
+        if (dist > radius) {
+            e.direction = (center - light.position) / dist;
+            const double sin_max = radius / dist;
+            e.cos_max = std::sqrt(std::max(0.0, 1.0 - sin_max * sin_max));
+        } else {
+            e.direction = {0.0, 0.0, -1.0};
+            e.cos_max = -1.0;
+        }
+        orthonormal_basis(e.direction, e.axis_a, e.axis_b);
+        e.power = light.intensity * 2.0 * std::numbers::pi * (1.0 - e.cos_max);
+    }
+    return e;
+}
+
+// Unpolarised Fresnel reflectance of a dielectric interface.
+double fresnel_reflectance(double cos_i, double cos_t, double n_i, double n_t) {
+    const double rs = (n_i * cos_i - n_t * cos_t) / (n_i * cos_i + n_t * cos_t);
+    const double rp = (n_t * cos_i - n_i * cos_t) / (n_t * cos_i + n_i * cos_t);
+    return 0.5 * (rs * rs + rp * rp);
+}
+
+// Ray logs: NoRayLog compiles away; RayRecorder keeps every query for bench/ replays.
+struct NoRayLog {
+    void ray(const glm::dvec3&, const glm::dvec3&, double, double, bool) {}
+};
+
+struct RayRecorder {
+    double offset = 0.0;   // the tracer's own minimum tnear
+    std::vector<RecordedRay> rays;
+    void ray(const glm::dvec3& o, const glm::dvec3& d, double tmin, double tmax, bool shadow) {
+        RecordedRay r;
+        for (int i = 0; i < 3; ++i) r.origin[i] = static_cast<float>(o[i]), r.dir[i] = static_cast<float>(d[i]);
+        r.tnear = static_cast<float>(std::max(tmin, offset));
+        r.tfar = tmax >= 3e38 ? std::numeric_limits<float>::infinity() : static_cast<float>(tmax);
+        r.shadow = shadow;
+        rays.push_back(r);
+    }
+};
+
+struct Accumulators {
+    std::vector<std::int64_t> bin_sum, bin_sq;   // receiver: sum of q, sum of q^2 / 2^30
+    std::vector<std::int64_t> pix_sum, pix_sq;   // camera
+};
+
+// Everything one photon needs, shared read-only by all threads.
+struct Transport {
+    const RayTracer* tracer = nullptr;
+    const FrameGeometry* frame = nullptr;
+    const ReceiverChart* chart = nullptr;
+    const CameraGBuffer* gbuffer = nullptr;
+    const CameraModel* camera = nullptr;
+    std::vector<double> pixel_scale;   // camera: d_c^2 / cos_c of each pixel's G-buffer point
+    std::vector<Emitter> emitters;
+    std::vector<std::uint64_t> photons_of_light;
+    double weight_ref = 1.0;           // largest flux per photon: normalises fixed-point weights
+    double outside_ior = 1.0;
+    int receiver_object = -1;
+    int max_depth = 8;
+    bool fresnel = false;
+    std::uint64_t seed = 1;
+
+    template <class Log>
+    void trace(std::uint64_t k, FluxLedger& ledger, Accumulators& acc, Log& log) const;
+    template <class Log>
+    void deposit_camera(const Hit& hit, const glm::dvec3& dir_in, double w, Accumulators& acc, Log& log) const;
+};
+
+void add_fixed(std::vector<std::int64_t>& sum, std::vector<std::int64_t>& sq, std::size_t i, double x) {
+    // x >= 0: adding 1/2 and truncating rounds to nearest, without a libm call.
+    sum[i] += static_cast<std::int64_t>(x * kFixedScale + 0.5);
+    sq[i] += static_cast<std::int64_t>(x * x * kFixedScale + 0.5);
+}
+
+template <class Log>
+void Transport::trace(std::uint64_t k, FluxLedger& ledger, Accumulators& acc, Log& log) const {
+    PhotonRandom rng(seed, k);
+    const std::size_t light = emitters.size() == 1 ? 0 : static_cast<std::size_t>(k % emitters.size());
+    const Emitter& emitter = emitters[light];
+    glm::dvec3 origin, dir;
+    const double u1 = rng.next(), u2 = rng.next();
+    emitter.sample(u1, u2, origin, dir);
+    const double u_dispersion = rng.next();
+    double w = emitter.flux_per_photon;
+    ledger.emitted += w;
+
+    const auto& objects = frame->scene->objects;
+    int depth = 0;       // specular events so far
+    int inside = -1;     // dielectric object the photon travels in (-1: outside medium)
+    for (;;) {
+        log.ray(origin, dir, 1e-6, 1e30, false);
+        const Hit hit = tracer->intersect(origin, dir);
+        if (!hit.valid) {
+            ledger.escaped += w;
+            return;
+        }
+        if (inside >= 0) {   // Beer-Lambert over the segment just travelled inside a dielectric
+            const double ka = objects[static_cast<std::size_t>(inside)].material.absorption;
+            if (ka > 0.0) {
+                const double kept = w * std::exp(-ka * hit.t);
+                ledger.absorbed += w - kept;
+                w = kept;
+            }
+        }
+        const Material& material = objects[static_cast<std::size_t>(hit.object)].material;
+        if (material.type == MaterialType::Diffuse) {
+            if (depth == 0) {
+                ledger.direct += w;
+                return;
+            }
+            if (hit.object == receiver_object) {
+                ledger.deposited_receiver += w;
+                const int bin = chart->bin_of(hit.position);
+                if (bin >= 0) add_fixed(acc.bin_sum, acc.bin_sq, static_cast<std::size_t>(bin), w / weight_ref);
+            } else {
+                ledger.deposited_other += w;
+            }
+            if (camera) deposit_camera(hit, dir, w, acc, log);
+            return;
+        }
+        if (depth >= max_depth) {
+            ledger.truncated += w;
+            return;
+        }
+        ++depth;
+
+        const bool from_outside = glm::dot(dir, hit.geometric_normal) < 0.0;
+        // Normal on the side the photon arrives from; fall back to the geometric one where the
+        // interpolated normal disagrees with the side (grazing hits on coarse meshes).
+        glm::dvec3 n = from_outside ? hit.shading_normal : -hit.shading_normal;
+        double cos_i = -glm::dot(dir, n);
+        if (cos_i <= 0.0) {
+            n = from_outside ? hit.geometric_normal : -hit.geometric_normal;
+            cos_i = -glm::dot(dir, n);
+        }
+        const glm::dvec3 reflected = dir + 2.0 * cos_i * n;
+        if (material.type == MaterialType::Mirror) {
+            dir = glm::normalize(reflected);
+            origin = hit.position;
+            continue;   // the medium does not change at a mirror
+        }
+        const double ior = material.ior + material.dispersion * u_dispersion;
+        const double n_i = from_outside ? outside_ior : ior;
+        const double n_t = from_outside ? ior : outside_ior;
+        const double eta = n_i / n_t;
+        const double sin2_t = eta * eta * (1.0 - cos_i * cos_i);
+        bool reflect = sin2_t >= 1.0;   // total internal reflection
+        double cos_t = 0.0;
+        if (!reflect) {
+            cos_t = std::sqrt(1.0 - sin2_t);
+            // Fresnel by Russian roulette: unbiased and flux conserving, one path per photon.
+            if (fresnel) reflect = rng.next() < fresnel_reflectance(cos_i, cos_t, n_i, n_t);
+        }
+        dir = reflect ? reflected : eta * dir + (eta * cos_i - cos_t) * n;
+        dir = glm::normalize(dir);
+        origin = hit.position;
+        // Inside or outside is decided by where the new direction actually points.
+        inside = glm::dot(dir, hit.geometric_normal) < 0.0 ? hit.object : -1;
+    }
+}
+
+template <class Log>
+void Transport::deposit_camera(const Hit& hit, const glm::dvec3& dir_in, double w, Accumulators& acc, Log& log) const {
+    double px, py;
+    if (!camera->project(hit.position, px, py)) return;
+    if (!(px >= 0.0 && py >= 0.0 && px < gbuffer->width && py < gbuffer->height)) return;
+    const int ix = static_cast<int>(px), iy = static_cast<int>(py);
+    const std::size_t index = gbuffer->index(ix, iy);
+    if (!gbuffer->covered[index] || gbuffer->object[index] != hit.object) return;
+    glm::dvec3 to_camera = camera->position - hit.position;
+    const double dist = glm::length(to_camera);
+    if (!(dist > 0.0)) return;
+    to_camera /= dist;
+    // The camera must see the side the photon landed on.
+    const double side = glm::dot(dir_in, hit.geometric_normal) < 0.0 ? 1.0 : -1.0;
+    if (side * glm::dot(hit.geometric_normal, to_camera) <= 0.0) return;
+    const double cos_c = side * glm::dot(hit.shading_normal, to_camera);
+    if (cos_c <= 0.0) return;
+    log.ray(hit.position, to_camera, 0.0, dist * (1.0 - 1e-6), true);
+    if (tracer->occluded(hit.position, to_camera, 0.0, dist * (1.0 - 1e-6))) return;
+    // E_pixel += w / A_pix with A_pix = omega d^2 / cos; stored relative to the pixel's own G-buffer
+    // footprint so the fixed-point value stays near w / weight_ref.
+    const double x = (w / weight_ref) * pixel_scale[index] * cos_c / (dist * dist);
+    add_fixed(acc.pix_sum, acc.pix_sq, index, x);
+}
+
+double nrmse_of(const Image& e, const Image& se, const std::vector<std::uint8_t>* mask) {
+    double sum_e = 0.0, sum_var = 0.0;
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < e.pixels.size(); ++i) {
+        if (mask && !(*mask)[i]) continue;
+        sum_e += e.pixels[i];
+        sum_var += static_cast<double>(se.pixels[i]) * se.pixels[i];
+        ++n;
+    }
+    if (n == 0 || !(sum_e > 0.0)) return 0.0;
+    return std::sqrt(sum_var / n) / (sum_e / n);
+}
+
+// Everything compute_reference needs before tracing; `camera` null for no camera view.
+Transport make_transport(const RayTracer& tracer, const ReceiverChart& chart, const CameraGBuffer* camera,
+                         const ReferenceSettings& settings, std::unique_ptr<CameraModel>& camera_model) {
+    const FrameGeometry& frame = tracer.frame();
+    const Scene& scene = *frame.scene;
+    const std::uint64_t photons = settings.photons;
+    const bool camera_view = camera != nullptr;
+    Transport transport;
+    transport.tracer = &tracer;
+    transport.frame = &frame;
+    transport.chart = &chart;
+    transport.receiver_object = scene.receiver.object_index;
+    transport.max_depth = scene.max_specular_depth;
+    transport.fresnel = scene.fresnel;
+    transport.seed = settings.seed;
+    transport.outside_ior = scene.medium.present ? scene.medium.ior : 1.0;
+    const std::size_t lights = scene.lights.size();
+    transport.weight_ref = 0.0;
+    for (std::size_t l = 0; l < lights; ++l) {
+        Emitter e = make_emitter(scene.lights[l], frame);
+        // Photon k belongs to light k mod L.
+        const std::uint64_t count = photons / lights + (l < photons % lights ? 1 : 0);
+        e.flux_per_photon = count > 0 ? e.power / static_cast<double>(count) : 0.0;
+        transport.weight_ref = std::max(transport.weight_ref, e.flux_per_photon);
+        transport.emitters.push_back(e);
+        transport.photons_of_light.push_back(count);
+    }
+    if (!(transport.weight_ref > 0.0)) transport.weight_ref = 1.0;
+
+    if (camera_view) {
+        camera_model = std::make_unique<CameraModel>(scene.camera);
+        if (camera_model->width != camera->width || camera_model->height != camera->height)
+            throw std::runtime_error("reference: camera G-buffer size differs from the scene camera");
+        transport.camera = camera_model.get();
+        transport.gbuffer = camera;
+        transport.pixel_scale.assign(camera->covered.size(), 0.0);
+        for (std::size_t i = 0; i < camera->covered.size(); ++i) {
+            if (!camera->covered[i]) continue;
+            const glm::dvec3 to_cam = camera_model->position - glm::dvec3(camera->position[i]);
+            const double d2 = glm::dot(to_cam, to_cam);
+            const double cos_c = d2 > 0.0 ? glm::dot(glm::dvec3(camera->normal[i]), to_cam) / std::sqrt(d2) : 1.0;
+            transport.pixel_scale[i] = std::max(d2, 1e-12) / std::clamp(cos_c, 0.05, 1.0);
+        }
+    }
+
+    return transport;
+}
+
+}  // namespace
+
+ReferenceResult compute_reference(const RayTracer& tracer, const ReceiverChart& chart,
+                                  const CameraGBuffer* camera, const ReferenceSettings& settings) {
+    const auto start = std::chrono::steady_clock::now();
+    const FrameGeometry& frame = tracer.frame();
+    const Scene& scene = *frame.scene;
+    if (scene.lights.empty()) throw std::runtime_error("reference: the scene has no light");
+    if (settings.photons == 0) throw std::runtime_error("reference: photons must be > 0");
+    const bool camera_view = camera != nullptr && settings.camera_view;
+    const std::uint64_t photons = settings.photons;
+
+    std::unique_ptr<CameraModel> camera_model;
+    const Transport transport = make_transport(tracer, chart, camera_view ? camera : nullptr, settings, camera_model);
+
+    const std::size_t bins = static_cast<std::size_t>(chart.width()) * chart.height();
+    const std::size_t pixels = camera_view ? camera->covered.size() : 0;
+    tbb::enumerable_thread_specific<Accumulators> accumulators([&] {
+        Accumulators a;
+        a.bin_sum.assign(bins, 0);
+        a.bin_sq.assign(bins, 0);
+        a.pix_sum.assign(pixels, 0);
+        a.pix_sq.assign(pixels, 0);
+        return a;
+    });
+    const std::uint64_t batches = (photons + kBatchSize - 1) / kBatchSize;
+    std::vector<FluxLedger> batch_ledgers(batches);
+    ProgressBar progress("reference " + scene.name, photons, settings.progress);
+
+    auto run_batches = [&] {
+        tbb::parallel_for(tbb::blocked_range<std::uint64_t>(0, batches, 1),
+                          [&](const tbb::blocked_range<std::uint64_t>& range) {
+                              Accumulators& acc = accumulators.local();
+                              for (std::uint64_t b = range.begin(); b < range.end(); ++b) {
+                                  const std::uint64_t first = b * kBatchSize;
+                                  const std::uint64_t last = std::min(photons, first + kBatchSize);
+                                  FluxLedger ledger;
+                                  NoRayLog log;
+                                  for (std::uint64_t k = first; k < last; ++k) transport.trace(k, ledger, acc, log);
+                                  batch_ledgers[b] = ledger;
+                                  progress.advance(last - first);
+                              }
+                          });
+    };
+    if (settings.threads > 0) {
+        tbb::task_arena arena(settings.threads);
+        arena.execute(run_batches);
+    } else {
+        run_batches();
+    }
+    progress.finish();
+
+    ReferenceResult result;
+    for (const FluxLedger& l : batch_ledgers) {
+        result.ledger.emitted += l.emitted;
+        result.ledger.deposited_receiver += l.deposited_receiver;
+        result.ledger.deposited_other += l.deposited_other;
+        result.ledger.direct += l.direct;
+        result.ledger.escaped += l.escaped;
+        result.ledger.absorbed += l.absorbed;
+        result.ledger.truncated += l.truncated;
+    }
+
+    // Integer sums are exact, so combining the threads' accumulators in any order gives the same bits.
+    std::vector<std::int64_t> bin_sum(bins, 0), bin_sq(bins, 0), pix_sum(pixels, 0), pix_sq(pixels, 0);
+    for (const Accumulators& a : accumulators) {
+        for (std::size_t i = 0; i < bins; ++i) bin_sum[i] += a.bin_sum[i], bin_sq[i] += a.bin_sq[i];
+        for (std::size_t i = 0; i < pixels; ++i) pix_sum[i] += a.pix_sum[i], pix_sq[i] += a.pix_sq[i];
+    }
+
+    const double n = static_cast<double>(photons);
+    const double wr = transport.weight_ref;
+    // E = (sum w) / A; se^2 = (N sum w^2 / A^2 - E^2) / (N - 1).
+    auto estimate = [&](std::int64_t sum, std::int64_t sq, double area, float& e_out, float& se_out) {
+        const double e = static_cast<double>(sum) / kFixedScale * wr / area;
+        const double m2 = n * (static_cast<double>(sq) / kFixedScale) * wr * wr / (area * area);
+        const double var = photons > 1 ? std::max(0.0, (m2 - e * e) / (n - 1.0)) : 0.0;
+        e_out = static_cast<float>(e);
+        se_out = static_cast<float>(std::sqrt(var));
+    };
+    result.receiver = Image(chart.width(), chart.height(), 1);
+    result.receiver_stderr = Image(chart.width(), chart.height(), 1);
+    for (int j = 0; j < chart.height(); ++j)
+        for (int i = 0; i < chart.width(); ++i) {
+            const std::size_t b = static_cast<std::size_t>(j) * chart.width() + i;
+            const double area = chart.bin_area(i, j);
+            if (area > 0.0) estimate(bin_sum[b], bin_sq[b], area, result.receiver.pixels[b], result.receiver_stderr.pixels[b]);
+        }
+    result.noise_nrmse = nrmse_of(result.receiver, result.receiver_stderr, nullptr);
+
+    if (camera_view) {
+        result.camera = Image(camera->width, camera->height, 1);
+        result.camera_stderr = Image(camera->width, camera->height, 1);
+        result.camera_covered = camera->covered;
+        for (int y = 0; y < camera->height; ++y)
+            for (int x = 0; x < camera->width; ++x) {
+                const std::size_t i = camera->index(x, y);
+                if (!camera->covered[i]) continue;
+                // E_pix = sum w / A_dep = (wr / A_c) sum x with A_c = omega * pixel_scale.
+                const double area = camera_model->pixel_solid_angle(x, y) * transport.pixel_scale[i];
+                estimate(pix_sum[i], pix_sq[i], area, result.camera.pixels[i], result.camera_stderr.pixels[i]);
+            }
+        result.noise_nrmse_camera = nrmse_of(result.camera, result.camera_stderr, &result.camera_covered);
+    }
+
+    result.photons = photons;
+    result.seed = settings.seed;
+    ReferenceSettings keyed = settings;
+    keyed.camera_view = camera_view;
+    result.cache_key = reference_cache_key(scene, frame.frame, keyed);
+    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return result;
+}
+
+}  // namespace caustics
+
+namespace caustics {
+
+std::vector<RecordedRay> record_reference_rays(const RayTracer& tracer, const ReceiverChart& chart,
+                                               const CameraGBuffer* camera, const ReferenceSettings& settings) {
+    const bool camera_view = camera != nullptr && settings.camera_view;
+    std::unique_ptr<CameraModel> camera_model;
+    const Transport transport = make_transport(tracer, chart, camera_view ? camera : nullptr, settings, camera_model);
+    Accumulators acc;
+    acc.bin_sum.assign(static_cast<std::size_t>(chart.width()) * chart.height(), 0);
+    acc.bin_sq = acc.bin_sum;
+    if (camera_view) {
+        acc.pix_sum.assign(camera->covered.size(), 0);
+        acc.pix_sq = acc.pix_sum;
+    }
+    RayRecorder recorder;
+    recorder.offset = scene_ray_offset(tracer.frame());
+    FluxLedger ledger;
+    for (std::uint64_t k = 0; k < settings.photons; ++k) transport.trace(k, ledger, acc, recorder);
+    return std::move(recorder.rays);
+}
+
+}  // namespace caustics

@@ -1,0 +1,379 @@
+#include "render_run.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <stdexcept>
+#include <vector>
+
+#include <tbb/global_control.h>
+
+#include "beauty.hpp"
+#include "errors.hpp"
+#include "image_io.hpp"
+#include "metrics.hpp"
+#include "registry.hpp"
+#include "timing.hpp"
+
+#ifndef CAUSTICS_BUILD_TYPE
+#define CAUSTICS_BUILD_TYPE "unknown"
+#endif
+#ifndef CAUSTICS_SOURCE_DIR
+#define CAUSTICS_SOURCE_DIR "."
+#endif
+
+namespace caustics {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+json params_json(const MethodInfo& info, const ParamSet& params) {
+    json out = json::object();
+    for (const ParamSpec& spec : info.params) {
+        auto it = params.values().find(spec.name);
+        if (it == params.values().end()) continue;
+        const std::string& text = it->second;
+        switch (spec.type) {
+        case ParamType::Int: out[spec.name] = std::stoll(text); break;
+        case ParamType::Float: out[spec.name] = json_number(std::stod(text)); break;
+        case ParamType::Bool: out[spec.name] = text == "true"; break;
+        case ParamType::Enum: out[spec.name] = text; break;
+        }
+    }
+    return out;
+}
+
+json error_json(const ErrorMetrics* e, bool radiometric) {
+    json out;
+    out["nrmse"] = e ? json_number(e->nrmse) : json(nullptr);
+    out["relmse"] = e ? json_number(e->relmse) : json(nullptr);
+    out["psnr"] = e ? json_number(e->psnr) : json(nullptr);
+    out["ssim"] = e ? json_number(e->ssim) : json(nullptr);
+    // A radiometric method is never fitted (DESIGN.md section 3).
+    const bool fitted = e && !radiometric && e->fitted;
+    out["nrmse_fit"] = fitted ? json_number(e->nrmse_fit) : json(nullptr);
+    out["fit_scale"] = fitted ? json_number(e->fit_scale) : json(nullptr);
+    return out;
+}
+
+std::int64_t count_nonfinite(const Image& image, const std::vector<std::uint8_t>* mask) {
+    std::int64_t n = 0;
+    const std::size_t pixels = static_cast<std::size_t>(image.width) * image.height;
+    for (std::size_t p = 0; p < pixels; ++p) {
+        if (mask && !(*mask)[p]) continue;
+        for (int c = 0; c < image.channels; ++c)
+            if (!std::isfinite(image.pixels[p * image.channels + c])) ++n;
+    }
+    return n;
+}
+
+void check_size(const Image& image, int w, int h, const std::string& method, const std::string& what) {
+    if (image.empty()) return;
+    if (image.width != w || image.height != h || image.channels != 1)
+        throw std::runtime_error("method " + method + " returned a " + what + " image of " +
+                                 std::to_string(image.width) + "x" + std::to_string(image.height) + "x" +
+                                 std::to_string(image.channels) + ", expected " + std::to_string(w) + "x" +
+                                 std::to_string(h) + "x1");
+}
+
+// The metrics.json skeleton: every key of DESIGN.md section 7, values null until measured.
+json metrics_skeleton(const SceneFrame& sf, const ResolvedMethod& m, const RenderOptions& options) {
+    json j;
+    j["method"] = m.info->name;
+    j["scene"] = sf.scene().name;
+    j["frame"] = sf.geometry().frame;
+    j["params"] = params_json(*m.info, m.params);
+    j["radiometric"] = m.info->radiometric;
+    j["time_ms"] = {{"median", nullptr}, {"min", nullptr}, {"p90", nullptr}};
+    j["fps"] = nullptr;
+    j["prepare_ms"] = nullptr;
+    j["update_ms"] = nullptr;
+    j["stages_ms"] = json::object();
+    j["threads"] = ThreadLimit::effective();
+    j["error"] = {{"receiver", error_json(nullptr, m.info->radiometric)},
+                  {"camera", error_json(nullptr, m.info->radiometric)}};
+    j["reference"] = {{"photons", nullptr}, {"noise_nrmse", nullptr}, {"cache_key", nullptr}};
+    j["health"] = json::object();
+    j["status"] = nullptr;
+    j["build_type"] = CAUSTICS_BUILD_TYPE;
+    j["warmup"] = options.warmup;
+    j["repeats"] = options.repeats;
+    j["below_reference_noise"] = nullptr;
+    j["message"] = "";
+    return j;
+}
+
+std::string join_messages(const std::vector<std::string>& parts) {
+    std::string s;
+    for (const auto& p : parts) s += (s.empty() ? "" : "; ") + p;
+    return s;
+}
+
+}  // namespace
+
+json json_number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+
+// ---------------------------------------------------------------------------------------------------
+
+std::string scenes_directory() {
+    std::error_code ec;
+    if (fs::is_directory("scenes", ec)) return "scenes";
+    return (fs::path(CAUSTICS_SOURCE_DIR) / "scenes").string();
+}
+
+std::string resolve_scene_path(const std::string& arg) {
+    std::error_code ec;
+    if (arg.empty() || fs::exists(arg, ec)) return arg;
+    if (fs::path(arg).has_parent_path()) return arg;   // a path that does not exist: load_scene says so
+    const fs::path dir = scenes_directory();
+    for (const fs::path& candidate : {dir / (arg + ".json"), dir / arg})
+        if (fs::is_regular_file(candidate, ec)) return candidate.string();
+    return arg;
+}
+
+SceneFrame::SceneFrame(Scene scene, int frame)
+    : scene_(std::move(scene)), geometry_(build_frame_geometry(scene_, frame)) {
+    tracer_ = std::make_unique<RayTracer>(geometry_);
+    chart_ = std::make_unique<ReceiverChart>(geometry_, scene_.receiver.width, scene_.receiver.height);
+    gbuffer_ = build_camera_gbuffer(*tracer_, scene_.camera);
+}
+
+ResolvedMethod resolve_method(const std::string& name, const std::map<std::string, std::string>& overrides) {
+    ResolvedMethod r;
+    r.info = &require_method(name);
+    r.params = ParamSet::resolve(name, r.info->params, overrides);
+    return r;
+}
+
+ReferenceResult reference_for(const SceneFrame& sf, const RenderOptions& options) {
+    ReferenceSettings settings;
+    settings.photons = options.photons;
+    settings.seed = options.seed;
+    settings.threads = options.threads;
+    settings.camera_view = true;
+    settings.progress = options.progress;
+    const std::string cache = options.cache_dir.empty() ? default_cache_dir() : options.cache_dir;
+    return load_or_compute_reference(sf.geometry(), sf.tracer(), sf.chart(), &sf.gbuffer(), settings, cache);
+}
+
+RenderRun run_method(const SceneFrame& sf, const ResolvedMethod& m, const RenderOptions& options,
+                     const ReferenceProvider& reference_provider) {
+    const MethodInfo& info = *m.info;
+    RenderRun run;
+    run.metrics = metrics_skeleton(sf, m, options);
+    std::vector<std::string> messages;
+
+    std::unique_ptr<Method> method = info.create(m.params);
+    const Capability cap = method->capabilities(sf.scene());
+    if (!cap.supported) {
+        run.status = "skipped";
+        run.message = cap.reason;
+        run.metrics["status"] = run.status;
+        run.metrics["message"] = run.message;
+        return run;
+    }
+
+    // Timed regions: prepare, update, each repeat of render. Nothing else (DESIGN.md section 6).
+    Stopwatch clock;
+    method->prepare(sf.scene());
+    const double prepare_ms = clock.ms();
+    clock.reset();
+    method->update(sf.geometry());
+    const double update_ms = clock.ms();
+
+    RenderRequest request;
+    request.receiver = &sf.chart();
+    request.camera = &sf.gbuffer();
+    for (int i = 0; i < options.warmup; ++i) (void)method->render(sf.geometry(), request);
+    std::vector<double> times;
+    std::map<std::string, std::vector<double>> stage_times;
+    const int repeats = std::max(1, options.repeats);
+    for (int i = 0; i < repeats; ++i) {
+        clock.reset();
+        CausticOutput out = method->render(sf.geometry(), request);
+        const double ms = clock.ms();
+        times.push_back(ms);
+        for (const auto& [stage, stage_ms] : out.stages_ms) stage_times[stage].push_back(stage_ms);
+        run.output = std::move(out);   // the previous output is freed outside the timed region
+    }
+    const TimingSummary t = summarize_ms(times);
+    json& j = run.metrics;
+    j["time_ms"] = {{"median", json_number(t.median)}, {"min", json_number(t.min)}, {"p90", json_number(t.p90)}};
+    j["fps"] = t.median > 0.0 ? json_number(1000.0 / t.median) : json(nullptr);
+    j["prepare_ms"] = json_number(prepare_ms);
+    j["update_ms"] = json_number(update_ms);
+    json stages = json::object();
+    for (auto& [stage, samples] : stage_times) stages[stage] = json_number(summarize_ms(samples).median);
+    j["stages_ms"] = stages;
+    j["repeats"] = repeats;
+
+    // Output shape and health: non-finite values are counted by the harness too and never averaged in.
+    const CausticOutput& out = run.output;
+    const CameraGBuffer& g = sf.gbuffer();
+    check_size(out.receiver, sf.chart().width(), sf.chart().height(), info.name, "receiver");
+    check_size(out.camera, g.width, g.height, info.name, "camera");
+    const std::int64_t nonfinite = count_nonfinite(out.receiver, nullptr) + count_nonfinite(out.camera, &g.covered);
+    json health = json::object();
+    for (const auto& [name, value] : out.health.counters) health[name] = value;
+    health["nonfinite_pixels"] = nonfinite;
+    j["health"] = health;
+    const bool unstable = nonfinite > 0 || out.health.get("nonfinite") > 0;
+    run.status = unstable ? "unstable" : "ok";
+    if (unstable)
+        messages.push_back("non-finite output (" + std::to_string(nonfinite) + " pixels, method counter " +
+                           std::to_string(out.health.get("nonfinite")) + "): error not measured");
+    if (out.receiver.empty()) messages.push_back("method produced no receiver map");
+    if (out.camera.empty()) messages.push_back("method produced no camera view");
+
+    // The reference is asked for only now, after the timed region and only for supported runs.
+    const ReferenceResult* reference = reference_provider ? reference_provider() : nullptr;
+    if (reference) {
+        run.have_reference = true;
+        j["reference"] = {{"photons", reference->photons},
+                          {"noise_nrmse", json_number(reference->noise_nrmse)},
+                          {"cache_key", reference->cache_key}};
+        if (!unstable) {
+            const bool fit = !info.radiometric;
+            if (!out.receiver.empty()) {
+                const ErrorMetrics e = compare_images(out.receiver, reference->receiver, fit);
+                j["error"]["receiver"] = error_json(&e, info.radiometric);
+                const double err = fit ? e.nrmse_fit : e.nrmse;
+                if (std::isfinite(err) && std::isfinite(reference->noise_nrmse))
+                    j["below_reference_noise"] = err < 3.0 * reference->noise_nrmse;
+            }
+            if (!out.camera.empty() && !reference->camera.empty()) {
+                std::vector<std::uint8_t> mask = g.covered;
+                if (reference->camera_covered.size() == mask.size())
+                    for (std::size_t p = 0; p < mask.size(); ++p) mask[p] &= reference->camera_covered[p];
+                const ErrorMetrics e = compare_images(out.camera, reference->camera, fit, &mask);
+                j["error"]["camera"] = error_json(&e, info.radiometric);
+                if (e.samples == 0) messages.push_back("camera view: no pixel's primary hit is a diffuse receiver");
+            }
+            if (fit) messages.push_back("not radiometric: nrmse_fit/fit_scale are after a least-squares scale fit");
+        }
+    } else {
+        messages.push_back("no reference: error values are null");
+    }
+    run.message = join_messages(messages);
+    j["status"] = run.status;
+    j["message"] = run.message;
+    return run;
+}
+
+void write_render_outputs(const std::string& dir, const SceneFrame& sf, const RenderRun& run,
+                          const RenderOptions& options) {
+    fs::create_directories(dir);
+    const fs::path d(dir);
+    if (run.status != "skipped") {
+        const CausticOutput& out = run.output;
+        if (!out.receiver.empty()) write_exr(out.receiver, (d / "receiver.exr").string());
+        if (!out.receiver_rgb.empty()) write_exr(out.receiver_rgb, (d / "receiver_rgb.exr").string());
+        if (!out.camera.empty()) {
+            // Only covered pixels carry a value; the rest is written as 0.
+            Image camera = out.camera;
+            const auto& covered = sf.gbuffer().covered;
+            for (std::size_t p = 0; p < covered.size(); ++p)
+                if (!covered[p]) camera.pixels[p] = 0.0f;
+            write_exr(camera, (d / "camera.exr").string());
+        }
+        for (const auto& [name, image] : out.debug)
+            if (!image.empty() && (image.channels == 1 || image.channels == 3))
+                write_exr(image, (d / ("debug_" + name + ".exr")).string());
+        if (options.beauty) {
+            BeautyInputs in;
+            in.gbuffer = &sf.gbuffer();
+            in.camera_ec = &out.camera;
+            in.chart = &sf.chart();
+            in.receiver_ec = &out.receiver;
+            write_beauty_png(render_beauty(sf.tracer(), in), (d / "beauty.png").string());
+        }
+    }
+    // metrics.json last: its presence says the run's files are complete.
+    write_text_atomic((d / "metrics.json").string(), run.metrics.dump(2) + "\n");
+}
+
+RenderRun run_render(const RenderOptions& options) {
+    ThreadLimit limit(options.threads);
+    // Every InputError comes from these three steps, before anything is written.
+    Scene scene = load_scene(resolve_scene_path(options.scene_path));
+    const ResolvedMethod method = resolve_method(options.method, options.overrides);
+    const SceneFrame sf(std::move(scene), options.frame);
+
+    std::optional<ReferenceResult> reference;
+    ReferenceProvider provider;
+    if (!options.no_reference)
+        provider = [&]() -> const ReferenceResult* {
+            reference = reference_for(sf, options);
+            return &*reference;
+        };
+    RenderRun run = run_method(sf, method, options, provider);
+    if (!options.out_dir.empty()) write_render_outputs(options.out_dir, sf, run, options);
+    return run;
+}
+
+// ---------------------------------------------------------------------------------------------------
+
+nlohmann::json reference_json(const Scene& scene, int frame, const ReferenceResult& ref) {
+    const FluxLedger& l = ref.ledger;
+    json j;
+    j["scene"] = scene.name;
+    j["scene_path"] = scene.path;
+    j["frame"] = frame;
+    j["photons"] = ref.photons;
+    j["seed"] = ref.seed;
+    j["cache_key"] = ref.cache_key;
+    j["noise_nrmse"] = json_number(ref.noise_nrmse);
+    j["noise_nrmse_camera"] = json_number(ref.noise_nrmse_camera);
+    j["seconds"] = json_number(ref.seconds);
+    j["from_cache"] = ref.from_cache;
+    j["photons_per_second"] = ref.seconds > 0.0 ? json_number(static_cast<double>(ref.photons) / ref.seconds)
+                                                : json(nullptr);
+    j["receiver"] = {{"object", scene.receiver.object}, {"width", ref.receiver.width}, {"height", ref.receiver.height}};
+    j["camera"] = {{"width", ref.camera.width}, {"height", ref.camera.height}};
+    j["ledger"] = {{"emitted", l.emitted},
+                   {"deposited_receiver", l.deposited_receiver},
+                   {"deposited_other", l.deposited_other},
+                   {"direct", l.direct},
+                   {"escaped", l.escaped},
+                   {"absorbed", l.absorbed},
+                   {"truncated", l.truncated},
+                   {"accounted", l.accounted()},
+                   {"relative_imbalance",
+                    l.emitted > 0.0 ? json_number((l.accounted() - l.emitted) / l.emitted) : json(nullptr)}};
+    j["build_type"] = CAUSTICS_BUILD_TYPE;
+    j["threads"] = ThreadLimit::effective();
+    return j;
+}
+
+void write_reference_outputs(const std::string& dir, const Scene& scene, int frame, const ReferenceResult& ref) {
+    fs::create_directories(dir);
+    const fs::path d(dir);
+    if (!ref.receiver.empty()) write_exr(ref.receiver, (d / "reference_receiver.exr").string());
+    if (!ref.camera.empty()) write_exr(ref.camera, (d / "reference_camera.exr").string());
+    if (!ref.receiver_stderr.empty()) write_exr(ref.receiver_stderr, (d / "reference_stderr.exr").string());
+    if (!ref.camera_stderr.empty()) write_exr(ref.camera_stderr, (d / "reference_camera_stderr.exr").string());
+    write_text_atomic((d / "reference.json").string(), reference_json(scene, frame, ref).dump(2) + "\n");
+}
+
+// ---------------------------------------------------------------------------------------------------
+
+struct ThreadLimit::Impl {
+    std::unique_ptr<tbb::global_control> control;
+};
+
+ThreadLimit::ThreadLimit(int threads) : impl_(std::make_unique<Impl>()) {
+    if (threads > 0)
+        impl_->control = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                               static_cast<std::size_t>(threads));
+}
+
+ThreadLimit::~ThreadLimit() = default;
+
+int ThreadLimit::effective() {
+    return static_cast<int>(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+}
+
+}  // namespace caustics

@@ -1,0 +1,343 @@
+#include "sweep.hpp"
+
+#include <signal.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <fcntl.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include "errors.hpp"
+#include "image_io.hpp"
+#include "registry.hpp"
+#include "render_run.hpp"
+#include "run_context.hpp"
+
+namespace caustics {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+struct ChildResult {
+    int exit_code = -1;
+    int signal = 0;
+    bool timed_out = false;
+};
+
+std::string self_executable() {
+    std::error_code ec;
+    fs::path p = fs::read_symlink("/proc/self/exe", ec);
+    return ec ? std::string("caustics") : p.string();
+}
+
+// Runs argv with stdout and stderr appended to log_path. The child is killed if this process dies
+// (so an interrupted sweep leaves no run writing behind its back) or when it outlives timeout_s.
+ChildResult run_child(const std::vector<std::string>& argv, const std::string& log_path, double timeout_s) {
+    std::vector<char*> args;
+    for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+    args.push_back(nullptr);
+    const pid_t parent = getpid();
+    const pid_t pid = fork();
+    if (pid < 0) throw std::runtime_error("sweep: fork failed");
+    if (pid == 0) {
+        prctl(PR_SET_PDEATHSIG, SIGKILL);
+        if (getppid() != parent) _exit(127);   // the parent died before prctl took effect
+        const int fd = open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        if (fd >= 0) {
+            dup2(fd, STDOUT_FILENO);
+            dup2(fd, STDERR_FILENO);
+            close(fd);
+        }
+        execv(args[0], args.data());
+        _exit(127);
+    }
+    ChildResult result;
+    const auto start = std::chrono::steady_clock::now();
+    int status = 0;
+    while (true) {
+        const pid_t r = waitpid(pid, &status, timeout_s > 0 ? WNOHANG : 0);
+        if (r == pid) break;
+        if (r < 0) throw std::runtime_error("sweep: waitpid failed");
+        const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        if (elapsed > timeout_s) {
+            kill(pid, SIGKILL);
+            waitpid(pid, &status, 0);
+            result.timed_out = true;
+            break;
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    if (WIFEXITED(status)) result.exit_code = WEXITSTATUS(status);
+    if (WIFSIGNALED(status)) result.signal = WTERMSIG(status);
+    return result;
+}
+
+std::string last_line_of(const std::string& path) {
+    std::ifstream in(path);
+    std::string line, last;
+    while (std::getline(in, line))
+        if (!line.empty()) last = line;
+    const std::string prefix = "caustics: error: ";
+    if (last.rfind(prefix, 0) == 0) last = last.substr(prefix.size());
+    return last;
+}
+
+// The complete lines of results.jsonl. A line cut off by a kill (no newline, or not JSON) is dropped:
+// its run is redone.
+std::vector<std::string> read_result_lines(const fs::path& path) {
+    std::vector<std::string> lines;
+    std::ifstream in(path, std::ios::binary);
+    if (!in) return lines;
+    std::stringstream buffer;
+    buffer << in.rdbuf();
+    const std::string text = buffer.str();
+    std::size_t begin = 0;
+    while (true) {
+        const std::size_t end = text.find('\n', begin);
+        if (end == std::string::npos) break;
+        std::string line = text.substr(begin, end - begin);
+        begin = end + 1;
+        const json row = json::parse(line, nullptr, false);
+        if (!row.is_discarded() && row.is_object() && row.contains("run_id")) lines.push_back(std::move(line));
+    }
+    return lines;
+}
+
+std::string joined(const std::vector<std::string>& lines) {
+    std::string text;
+    for (const auto& l : lines) text += l + "\n";
+    return text;
+}
+
+std::string csv_field(const json& v) {
+    std::string s;
+    if (v.is_null()) return "";
+    if (v.is_string()) s = v.get<std::string>();
+    else if (v.is_boolean()) s = v.get<bool>() ? "true" : "false";
+    else if (v.is_number()) s = v.dump();
+    else s = v.dump();
+    if (s.find_first_of(",\"\n\r") == std::string::npos) return s;
+    std::string q = "\"";
+    for (char c : s) q += (c == '"') ? std::string("\"\"") : std::string(1, c);
+    return q + "\"";
+}
+
+const json& at_path(const json& j, std::initializer_list<const char*> keys) {
+    static const json null_value;
+    const json* cur = &j;
+    for (const char* k : keys) {
+        if (!cur->is_object() || !cur->contains(k)) return null_value;
+        cur = &(*cur)[k];
+    }
+    return *cur;
+}
+
+// The row of a run that produced no metrics.json (bad parameters, crash, timeout).
+json bare_row(const PlannedRun& run, const std::string& status, const std::string& message) {
+    json params(json::object());
+    for (const auto& [k, v] : run.params) params[k] = v;
+    return {{"method", run.method}, {"scene", run.scene_name}, {"frame", run.frame}, {"params", params},
+            {"status", status}, {"message", message}};
+}
+
+}  // namespace
+
+std::string results_csv(const SweepSpec& spec, const std::vector<json>& rows) {
+    std::set<std::string> param_names;
+    for (const auto& m : spec.methods)
+        if (const MethodInfo* info = find_method(m.method))
+            for (const auto& p : info->params) param_names.insert(p.name);
+    struct Column {
+        std::string name;
+        std::function<json(const json&)> get;
+    };
+    std::vector<Column> columns;
+    auto add = [&](std::string name, std::initializer_list<const char*> path) {
+        std::vector<const char*> keys(path);
+        columns.push_back({std::move(name), [keys](const json& r) {
+                               const json* cur = &r;
+                               for (const char* k : keys) {
+                                   if (!cur->is_object() || !cur->contains(k)) return json();
+                                   cur = &(*cur)[k];
+                               }
+                               return *cur;
+                           }});
+    };
+    add("run_id", {"run_id"});
+    add("scene", {"scene"});
+    add("frame", {"frame"});
+    add("method", {"method"});
+    add("status", {"status"});
+    add("radiometric", {"radiometric"});
+    add("grid", {"params", "grid"});
+    add("iterations", {"params", "iterations"});
+    add("time_ms_median", {"time_ms", "median"});
+    add("time_ms_min", {"time_ms", "min"});
+    add("time_ms_p90", {"time_ms", "p90"});
+    add("fps", {"fps"});
+    add("prepare_ms", {"prepare_ms"});
+    add("update_ms", {"update_ms"});
+    for (const char* metric : {"nrmse", "relmse", "psnr", "ssim", "nrmse_fit", "fit_scale"}) {
+        add(metric, {"error", "receiver", metric});
+        add(std::string("camera_") + metric, {"error", "camera", metric});
+    }
+    add("noise_nrmse", {"reference", "noise_nrmse"});
+    add("below_reference_noise", {"below_reference_noise"});
+    add("reference_photons", {"reference", "photons"});
+    add("threads", {"threads"});
+    columns.push_back({"health", [](const json& r) {
+                           std::string s;
+                           if (r.contains("health") && r["health"].is_object())
+                               for (const auto& [k, v] : r["health"].items())
+                                   s += (s.empty() ? "" : ";") + k + "=" + v.dump();
+                           return json(s);
+                       }});
+    for (const auto& name : param_names) {
+        columns.push_back({"param." + name, [name](const json& r) {
+                               const json& v = at_path(r, {"params"});
+                               return v.is_object() && v.contains(name) ? v[name] : json();
+                           }});
+    }
+    add("message", {"message"});
+
+    std::string out;
+    for (std::size_t c = 0; c < columns.size(); ++c) out += (c ? "," : "") + columns[c].name;
+    out += "\n";
+    for (const auto& row : rows) {
+        for (std::size_t c = 0; c < columns.size(); ++c) out += (c ? "," : "") + csv_field(columns[c].get(row));
+        out += "\n";
+    }
+    return out;
+}
+
+SweepSummary run_sweep(const SweepOptions& options) {
+    const SweepSpec spec = load_sweep_spec(options.spec_path, options.axis_overrides);
+    const std::vector<PlannedRun> runs = plan_runs(spec);
+    if (runs.size() > kMaxRunsWithoutConfirmation && !options.yes)
+        throw InputError(options.spec_path, "methods",
+                         "the sweep has " + std::to_string(runs.size()) + " runs (more than " +
+                             std::to_string(kMaxRunsWithoutConfirmation) + "); pass --yes to run it anyway");
+    if (options.out_dir.empty()) throw InputError("--out", "", "a sweep needs an output folder");
+    const fs::path dir(options.out_dir);
+    const fs::path jsonl = dir / "results.jsonl";
+    std::error_code ec;
+    if (!options.resume && fs::exists(jsonl, ec))
+        throw InputError("--out", options.out_dir, "already holds a sweep; pass --resume to continue it or choose another folder");
+    // Every scene must load before anything runs: a malformed scene is bad input of the whole sweep.
+    for (const auto& path : spec.scenes) (void)load_scene(path);
+
+    fs::create_directories(dir / "runs");
+    json manifest = run_context();
+    manifest["spec_path"] = options.spec_path;
+    manifest["spec"] = spec.as_run;
+    manifest["runs_planned"] = runs.size();
+    write_text_atomic((dir / "manifest.json").string(), manifest.dump(2) + "\n");
+
+    std::vector<std::string> lines = read_result_lines(jsonl);
+    std::set<std::string> finished;
+    std::vector<json> rows;
+    for (const auto& l : lines) {
+        rows.push_back(json::parse(l));
+        finished.insert(rows.back()["run_id"].get<std::string>());
+    }
+    // Rewrite once so that a cut-off trailing line is gone before new lines follow it.
+    write_text_atomic(jsonl.string(), joined(lines));
+    write_text_atomic((dir / "results.csv").string(), results_csv(spec, rows));
+
+    SweepSummary summary;
+    summary.total = runs.size();
+    summary.done_before = finished.size();
+    const std::string program = options.render_program.empty() ? self_executable() : options.render_program;
+    const std::string cache = options.cache_dir.empty() ? default_cache_dir() : options.cache_dir;
+    const double timeout = options.timeout_s > 0.0 ? options.timeout_s : spec.timeout_s;
+    const auto start = std::chrono::steady_clock::now();
+    std::set<std::string> references_done;
+
+    for (const PlannedRun& run : runs) {
+        if (finished.count(run.id)) continue;
+        const fs::path run_dir = dir / "runs" / run.id;
+        fs::remove_all(run_dir, ec);   // a run cut off earlier is redone from scratch
+        fs::create_directories(run_dir);
+
+        // The shared reference of this scene and frame, computed here once, read by the children from
+        // the cache. A frame outside the scene's animation is the run's problem (skipped), not the sweep's.
+        const std::string ref_key = run.scene_name + "-f" + std::to_string(run.frame);
+        if (!references_done.count(ref_key)) {
+            references_done.insert(ref_key);
+            try {
+                RenderOptions ro;
+                ro.photons = spec.photons;
+                ro.seed = spec.seed;
+                ro.threads = options.threads;
+                ro.cache_dir = cache;
+                ro.progress = options.progress;
+                SceneFrame sf(load_scene(run.scene_path), run.frame);
+                const ReferenceResult ref = reference_for(sf, ro);
+                write_reference_outputs((dir / "references" / ref_key).string(), sf.scene(), run.frame, ref);
+            } catch (const InputError&) {
+                // Recorded per run below, from the child's message.
+            }
+        }
+
+        std::vector<std::string> argv = {program, "render", run.scene_path, "--method", run.method,
+                                         "--frame", std::to_string(run.frame), "--out", run_dir.string(),
+                                         "--photons", std::to_string(spec.photons), "--seed", std::to_string(spec.seed),
+                                         "--warmup", std::to_string(spec.warmup), "--repeats", std::to_string(spec.repeats),
+                                         "--threads", std::to_string(options.threads), "--cache", cache};
+        for (const auto& [k, v] : run.params) {
+            argv.push_back("--set");
+            argv.push_back(k + "=" + v);
+        }
+        const std::string log = (run_dir / "log.txt").string();
+        if (options.progress) {
+            const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            const std::size_t done = summary.ran, left = runs.size() - finished.size() - summary.ran;
+            std::string eta = done ? std::to_string(static_cast<long>(elapsed / done * left)) + " s" : "?";
+            std::fprintf(stderr, "sweep [%zu/%zu] %s  (%.2f runs/s, ETA %s)\n", finished.size() + summary.ran + 1,
+                         runs.size(), run.id.c_str(), done ? done / elapsed : 0.0, eta.c_str());
+        }
+        const ChildResult child = run_child(argv, log, timeout);
+
+        json row;
+        const fs::path metrics_path = run_dir / "metrics.json";
+        if (child.exit_code == 0 && fs::exists(metrics_path)) {
+            std::ifstream in(metrics_path);
+            row = json::parse(in, nullptr, false);
+            if (row.is_discarded()) row = bare_row(run, "failed", "metrics.json unreadable");
+        } else if (child.timed_out) {
+            row = bare_row(run, "failed", "timed out after " + std::to_string(timeout) + " s");
+        } else if (child.signal) {
+            row = bare_row(run, "failed", std::string("crashed: ") + strsignal(child.signal) + " (" + last_line_of(log) + ")");
+        } else if (child.exit_code == 2) {
+            row = bare_row(run, "skipped", last_line_of(log));   // the method rejected the parameters
+        } else {
+            row = bare_row(run, "failed", "exit code " + std::to_string(child.exit_code) + ": " + last_line_of(log));
+        }
+        row["run_id"] = run.id;
+        row["scene"] = run.scene_name;
+        const std::string status = row.value("status", "failed");
+        summary.ok += status == "ok";
+        summary.skipped += status == "skipped";
+        summary.failed += status == "failed";
+        summary.unstable += status == "unstable";
+        ++summary.ran;
+
+        lines.push_back(row.dump());
+        rows.push_back(row);
+        write_text_atomic(jsonl.string(), joined(lines));
+        write_text_atomic((dir / "results.csv").string(), results_csv(spec, rows));
+    }
+    return summary;
+}
+
+}  // namespace caustics

@@ -1,0 +1,472 @@
+// 3-D scalar grids for volume caustic textures: lookup, Laplacian, fast-marching heap.
+#include "volume_grid.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <chrono>
+#include <limits>
+#include <optional>
+
+#include <tbb/parallel_for.h>
+
+namespace caustics {
+
+bool VolumeShape::contains(const glm::dvec3& p) const {
+    const glm::dvec3 hi = origin + extent();
+    return p.x >= origin.x && p.y >= origin.y && p.z >= origin.z && p.x <= hi.x && p.y <= hi.y &&
+           p.z <= hi.z;
+}
+
+VolumeShape VolumeShape::padded(int cells) const {
+    VolumeShape s = *this;
+    s.origin -= glm::dvec3(cells * spacing);
+    s.nx += 2 * cells;
+    s.ny += 2 * cells;
+    s.nz += 2 * cells;
+    return s;
+}
+
+namespace {
+
+// Continuous index along one axis: lower centre index and weight of the upper one, clamped.
+inline void axis_coord(double x, int n, int& i0, int& i1, float& w) {
+    const double g = std::clamp(x - 0.5, 0.0, static_cast<double>(n - 1));
+    i0 = std::min(static_cast<int>(g), std::max(n - 2, 0));
+    i1 = std::min(i0 + 1, n - 1);
+    w = static_cast<float>(g - i0);
+}
+
+}  // namespace
+
+bool trilinear(const VolumeF& grid, const glm::dvec3& p, float& value) {
+    const VolumeShape& s = grid.shape;
+    value = 0.0f;
+    if (!(s.size() > 0) || !s.contains(p)) return false;
+    const glm::dvec3 g = (p - s.origin) / s.spacing;
+    int i0, i1, j0, j1, k0, k1;
+    float fx, fy, fz;
+    axis_coord(g.x, s.nx, i0, i1, fx);
+    axis_coord(g.y, s.ny, j0, j1, fy);
+    axis_coord(g.z, s.nz, k0, k1, fz);
+    auto v = [&](int i, int j, int k) { return grid.data[s.index(i, j, k)]; };
+    const float c00 = v(i0, j0, k0) + fx * (v(i1, j0, k0) - v(i0, j0, k0));
+    const float c10 = v(i0, j1, k0) + fx * (v(i1, j1, k0) - v(i0, j1, k0));
+    const float c01 = v(i0, j0, k1) + fx * (v(i1, j0, k1) - v(i0, j0, k1));
+    const float c11 = v(i0, j1, k1) + fx * (v(i1, j1, k1) - v(i0, j1, k1));
+    const float c0 = c00 + fy * (c10 - c00), c1 = c01 + fy * (c11 - c01);
+    value = c0 + fz * (c1 - c0);
+    return true;
+}
+
+namespace {
+
+// Second difference along one axis at index a of n, with stride; quadratic extrapolation at faces.
+inline double second_difference(const double* p, int a, int n, std::ptrdiff_t stride) {
+    if (n < 3) return 0.0;
+    if (a == 0) return p[0] - 2.0 * p[stride] + p[2 * stride];
+    if (a == n - 1) return p[0] - 2.0 * p[-stride] + p[-2 * stride];
+    return p[-stride] - 2.0 * p[0] + p[stride];
+}
+
+}  // namespace
+
+void laplacian(const VolumeD& phi, VolumeF& out) {
+    const VolumeShape& s = phi.shape;
+    out.shape = s;
+    out.data.resize(s.size());
+    const double inv_h2 = 1.0 / (s.spacing * s.spacing);
+    const std::ptrdiff_t sy = s.nx, sz = static_cast<std::ptrdiff_t>(s.nx) * s.ny;
+    tbb::parallel_for(0, s.nz, [&](int k) {
+        for (int j = 0; j < s.ny; ++j) {
+            const std::size_t row = s.index(0, j, k);
+            const double* p = phi.data.data() + row;
+            float* o = out.data.data() + row;
+            const bool interior_yz = j > 0 && j + 1 < s.ny && k > 0 && k + 1 < s.nz;
+            for (int i = 0; i < s.nx; ++i) {
+                double lap;
+                if (interior_yz && i > 0 && i + 1 < s.nx) {
+                    lap = p[i - 1] + p[i + 1] + p[i - sy] + p[i + sy] + p[i - sz] + p[i + sz] - 6.0 * p[i];
+                } else {
+                    lap = second_difference(p + i, i, s.nx, 1) + second_difference(p + i, j, s.ny, sy) +
+                          second_difference(p + i, k, s.nz, sz);
+                }
+                o[i] = static_cast<float>(lap * inv_h2);
+            }
+        }
+    });
+}
+
+void CellHeap::push_or_decrease(std::size_t cell, double key) {
+    std::uint32_t at = pos_[cell];
+    if (at == kAbsent) {
+        at = static_cast<std::uint32_t>(heap_.size());
+        heap_.push_back({key, static_cast<std::uint32_t>(cell)});
+        pos_[cell] = at;
+    } else {
+        if (!(key < heap_[at].key)) return;
+        heap_[at].key = key;
+    }
+    sift_up(at);
+}
+
+std::size_t CellHeap::pop(double& key) {
+    const Entry top = heap_.front();
+    key = top.key;
+    pos_[top.cell] = kAbsent;
+    const Entry last = heap_.back();
+    heap_.pop_back();
+    if (!heap_.empty()) {
+        heap_[0] = last;
+        pos_[last.cell] = 0;
+        sift_down(0);
+    }
+    return top.cell;
+}
+
+void CellHeap::sift_up(std::size_t at) {
+    const Entry e = heap_[at];
+    while (at > 0) {
+        const std::size_t parent = (at - 1) / 2;
+        if (!(e.key < heap_[parent].key)) break;
+        heap_[at] = heap_[parent];
+        pos_[heap_[at].cell] = static_cast<std::uint32_t>(at);
+        at = parent;
+    }
+    heap_[at] = e;
+    pos_[e.cell] = static_cast<std::uint32_t>(at);
+}
+
+void CellHeap::sift_down(std::size_t at) {
+    const Entry e = heap_[at];
+    const std::size_t n = heap_.size();
+    for (;;) {
+        std::size_t child = 2 * at + 1;
+        if (child >= n) break;
+        if (child + 1 < n && heap_[child + 1].key < heap_[child].key) ++child;
+        if (!(heap_[child].key < e.key)) break;
+        heap_[at] = heap_[child];
+        pos_[heap_[at].cell] = static_cast<std::uint32_t>(at);
+        at = child;
+    }
+    heap_[at] = e;
+    pos_[e.cell] = static_cast<std::uint32_t>(at);
+}
+
+// ---- Height-field interfaces ----
+
+const ObjectInstance* find_water_interface(const FrameGeometry& frame) {
+    for (const ObjectInstance& o : frame.objects)
+        if (o.object && o.object->shape == ShapeType::HeightField &&
+            o.object->material.type == MaterialType::Dielectric && o.heightfield)
+            return &o;
+    return nullptr;
+}
+
+std::string volume_caustics_unsupported(const Scene& scene) {
+    bool water = false;
+    for (const Object& o : scene.objects)
+        if (o.shape == ShapeType::HeightField && o.material.type == MaterialType::Dielectric) water = true;
+    if (!water) return "needs a height-field dielectric interface (water surface); the scene has none";
+    if (scene.lights.empty() || scene.lights.front().type != LightType::Directional)
+        return "needs a directional light (the caustic volume is propagated from the interface along one "
+               "light direction); the scene's first light is not directional";
+    if (scene.lights.front().direction.z >= 0.0) return "the directional light does not travel downward onto the interface";
+    return {};
+}
+
+double extended_height(const HeightField& hf, double x, double y, glm::dvec2* gradient) {
+    const glm::dvec2 lo = hf.origin, hi = hf.origin + hf.extent();
+    const double xc = std::clamp(x, lo.x, hi.x), yc = std::clamp(y, lo.y, hi.y);
+    const glm::dvec2 g = hf.sample_gradient(xc, yc);
+    if (gradient) *gradient = g;
+    double h = hf.sample_height(xc, yc);
+    if (!hf.periodic) h += g.x * (x - xc) + g.y * (y - yc);
+    return h;
+}
+
+double extended_vertex_height(const HeightField& hf, int a, int b) {
+    const int ac = std::clamp(a, 0, hf.nx - 1), bc = std::clamp(b, 0, hf.ny - 1);
+    double h = hf.z(ac, bc);
+    if (ac != a || bc != b) {
+        const glm::vec2 g = hf.grad(ac, bc);
+        h += g.x * (a - ac) * hf.spacing.x + g.y * (b - bc) * hf.spacing.y;
+    }
+    return h;
+}
+
+namespace {
+
+// Closest point on triangle abc to p (Ericson, Real-Time Collision Detection, 5.1.5).
+glm::dvec3 closest_on_triangle(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
+    const glm::dvec3 ab = b - a, ac = c - a, ap = p - a;
+    const double d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
+    if (d1 <= 0.0 && d2 <= 0.0) return a;
+    const glm::dvec3 bp = p - b;
+    const double d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
+    if (d3 >= 0.0 && d4 <= d3) return b;
+    const double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return a + ab * (d1 / (d1 - d3));
+    const glm::dvec3 cp = p - c;
+    const double d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
+    if (d6 >= 0.0 && d5 <= d6) return c;
+    const double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return a + ac * (d2 / (d2 - d6));
+    const double va = d3 * d6 - d5 * d4;
+    if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    const double denom = 1.0 / (va + vb + vc);
+    return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+// Squared distance from p to the two triangles of height-field cell (a, b) (extended past the edge).
+double cell_distance2(const HeightField& hf, int a, int b, const glm::dvec3& p) {
+    auto vertex = [&](int i, int j) {
+        return glm::dvec3(hf.origin.x + i * hf.spacing.x, hf.origin.y + j * hf.spacing.y,
+                          extended_vertex_height(hf, i, j));
+    };
+    const glm::dvec3 v00 = vertex(a, b), v10 = vertex(a + 1, b), v01 = vertex(a, b + 1), v11 = vertex(a + 1, b + 1);
+    const glm::dvec3 q1 = closest_on_triangle(p, v00, v10, v11) - p;
+    const glm::dvec3 q2 = closest_on_triangle(p, v00, v11, v01) - p;
+    return std::min(glm::dot(q1, q1), glm::dot(q2, q2));
+}
+
+double window_distance2(const HeightField& hf, double x, double y, int radius, const glm::dvec3& p) {
+    const int ca = static_cast<int>(std::floor((x - hf.origin.x) / hf.spacing.x));
+    const int cb = static_cast<int>(std::floor((y - hf.origin.y) / hf.spacing.y));
+    double best = std::numeric_limits<double>::infinity();
+    for (int b = cb - radius; b <= cb + radius; ++b)
+        for (int a = ca - radius; a <= ca + radius; ++a) best = std::min(best, cell_distance2(hf, a, b, p));
+    return best;
+}
+
+}  // namespace
+
+double signed_distance_to_interface(const HeightField& hf, const glm::dvec3& p) {
+    glm::dvec2 g;
+    const double gap = p.z - extended_height(hf, p.x, p.y, &g);
+    // Foot point: p - S(q) is parallel to the normal (-g, 1), i.e. q = p.xy + (p.z - h(q)) g(q). The
+    // foot point lies within |gap| of p horizontally (the vertical gap bounds the distance).
+    glm::dvec2 q(p.x, p.y);
+    for (int it = 0; it < 8; ++it) {
+        glm::dvec2 gq;
+        const double hq = extended_height(hf, q.x, q.y, &gq);
+        glm::dvec2 step = glm::dvec2(p.x, p.y) + (p.z - hq) * gq - q;
+        glm::dvec2 next = q + step;
+        const glm::dvec2 off = next - glm::dvec2(p.x, p.y);
+        const double len = glm::length(off);
+        if (len > std::fabs(gap)) next = glm::dvec2(p.x, p.y) + off * (std::fabs(gap) / len);
+        const bool done = glm::length(next - q) < 1e-4 * std::min(hf.spacing.x, hf.spacing.y);
+        q = next;
+        if (done) break;
+    }
+    double d2 = std::min(window_distance2(hf, q.x, q.y, 2, p), window_distance2(hf, p.x, p.y, 1, p));
+    const double d = std::min(std::sqrt(d2), std::fabs(gap));
+    return gap > 0.0 ? -d : d;
+}
+
+VolumeShape caustic_volume(const FrameGeometry& frame, const ObjectInstance& water, int grid, double margin_fraction) {
+    const HeightField& hf = *water.heightfield;
+    const glm::dvec2 rect_lo = hf.origin, rect_hi = hf.origin + hf.extent();
+    double hmin = 1e300, hmax = -1e300;
+    for (float z : hf.height) {
+        hmin = std::min(hmin, double(z));
+        hmax = std::max(hmax, double(z));
+    }
+    glm::dvec2 lo(1e300), hi(-1e300);
+    double zmin = 1e300;
+    for (const ObjectInstance& o : frame.objects) {
+        if (!o.object || o.object->material.type != MaterialType::Diffuse || !o.bounds.valid()) continue;
+        const glm::dvec2 blo = glm::max(glm::dvec2(o.bounds.lo), rect_lo);
+        const glm::dvec2 bhi = glm::min(glm::dvec2(o.bounds.hi), rect_hi);
+        if (blo.x > bhi.x || blo.y > bhi.y || o.bounds.lo.z >= hmax) continue;
+        lo = glm::min(lo, blo);
+        hi = glm::max(hi, bhi);
+        zmin = std::min(zmin, o.bounds.lo.z);
+    }
+    if (lo.x > hi.x) {
+        lo = rect_lo;
+        hi = rect_hi;
+    }
+    glm::dvec2 ext = hi - lo;
+    double longest = std::max(ext.x, ext.y);
+    if (!(longest > 0.0)) longest = std::max(std::max(hf.extent().x, hf.extent().y), 1e-3);
+    if (zmin > 1e299) zmin = hmin - 0.5 * longest;
+    lo -= margin_fraction * ext;
+    hi += margin_fraction * ext;
+    ext = hi - lo;
+    grid = std::max(grid, 1);
+    VolumeShape s;
+    s.spacing = longest * (1.0 + 2.0 * margin_fraction) / grid;
+    s.nx = std::max(1, static_cast<int>(std::ceil(ext.x / s.spacing - 1e-6)));
+    s.ny = std::max(1, static_cast<int>(std::ceil(ext.y / s.spacing - 1e-6)));
+    const double top = hmax + s.spacing, bottom = zmin - s.spacing;
+    s.nz = std::max(2, static_cast<int>(std::ceil((top - bottom) / s.spacing - 1e-6)));
+    const glm::dvec2 mid = 0.5 * (lo + hi);
+    s.origin = glm::dvec3(mid.x - 0.5 * s.nx * s.spacing, mid.y - 0.5 * s.ny * s.spacing, top - s.nz * s.spacing);
+    return s;
+}
+
+glm::dvec3 mean_refracted_direction(const Scene& scene, double ior) {
+    glm::dvec3 d = scene.lights.empty() ? glm::dvec3(0, 0, -1) : glm::normalize(scene.lights.front().direction);
+    const double eta = 1.0 / ior, cos_i = std::fabs(d.z);
+    const double k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
+    return glm::normalize(eta * d + (eta * cos_i - std::sqrt(std::max(k, 0.0))) * glm::dvec3(0, 0, 1));
+}
+
+double flat_transmitted_irradiance(const Scene& scene, double ior, const glm::dvec3& receiver_normal) {
+    if (scene.lights.empty()) return 0.0;
+    const Light& light = scene.lights.front();
+    const glm::dvec3 d = glm::normalize(light.direction);
+    const double cos_i = std::fabs(d.z);
+    const glm::dvec3 t = mean_refracted_direction(scene, ior);
+    double transmittance = 1.0;
+    if (scene.fresnel) {
+        const double cos_t = std::fabs(t.z);
+        const double rs = (cos_i - ior * cos_t) / (cos_i + ior * cos_t);
+        const double rp = (ior * cos_i - cos_t) / (ior * cos_i + cos_t);
+        transmittance = 1.0 - 0.5 * (rs * rs + rp * rp);
+    }
+    // Flux per horizontal area E0 cos_i T, carried along t onto the receiver.
+    const double on_receiver = std::max(0.0, -glm::dot(t, glm::normalize(receiver_normal)));
+    return light.irradiance * cos_i * transmittance * on_receiver / std::max(std::fabs(t.z), 1e-9);
+}
+
+// ---- Receiver lookups ----
+
+namespace {
+
+struct LookupContext {
+    const VolumeLookup* lookup;
+    glm::dvec3 refracted{0, 0, -1};
+    double depth_scale = 1.0;
+};
+
+// Texture value at a receiver point; false when it falls outside the box.
+bool lookup_value(const LookupContext& ctx, glm::dvec3 p, float& value, bool& clamped) {
+    const VolumeShape& s = ctx.lookup->texture->shape;
+    clamped = false;
+    if (!s.contains(p)) {
+        value = 0.0f;
+        return false;
+    }
+    if (ctx.lookup->scaled_ior) {
+        const glm::dvec3& t = ctx.refracted;
+        const double along = (ctx.lookup->surface_z - p.z) / std::max(-t.z, 1e-6);  // path below the surface
+        glm::dvec3 q = p - along * t;                                          // entry point on the surface
+        q.z = ctx.lookup->surface_z - along * ctx.depth_scale;
+        const glm::dvec3 lo = s.origin, hi = s.origin + s.extent();
+        const glm::dvec3 qc = glm::clamp(q, lo, hi);
+        clamped = qc != q;
+        p = qc;
+    }
+    return trilinear(*ctx.lookup->texture, p, value);
+}
+
+double elapsed_ms(std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+CausticOutput render_volume_texture(const FrameGeometry& frame, const RenderRequest& request, const VolumeLookup& lookup) {
+    CausticOutput out;
+    const Scene& scene = *frame.scene;
+    LookupContext ctx{&lookup};
+    ctx.refracted = mean_refracted_direction(scene, lookup.ior);
+    ctx.depth_scale = (lookup.ior - 1.0) / lookup.ior;
+    std::int64_t outside = 0, clamped = 0, nonfinite = 0;
+
+    auto t0 = std::chrono::steady_clock::now();
+    std::optional<ReceiverChart> own_chart;
+    const ReceiverChart* chart = request.receiver;
+    if (!chart && lookup.normalize_flux) {
+        own_chart.emplace(frame, scene.receiver.width, scene.receiver.height);
+        chart = &*own_chart;
+    }
+    Image receiver;
+    if (chart) {
+        const int w = chart->width(), hgt = chart->height();
+        receiver = Image(w, hgt, 1);
+        std::vector<std::int64_t> row_outside(static_cast<std::size_t>(hgt)), row_clamped(row_outside.size());
+        tbb::parallel_for(0, hgt, [&](int j) {
+            for (int i = 0; i < w; ++i) {
+                const glm::dvec3 p = chart->point((i + 0.5) / w, (j + 0.5) / hgt);
+                float v;
+                bool c;
+                if (!lookup_value(ctx, p, v, c)) ++row_outside[static_cast<std::size_t>(j)];
+                if (c) ++row_clamped[static_cast<std::size_t>(j)];
+                receiver.at(i, j) = v;
+            }
+        });
+        for (std::size_t j = 0; j < row_outside.size(); ++j) {
+            outside += row_outside[j];
+            clamped += row_clamped[j];
+        }
+    }
+    out.stages_ms.emplace_back("receiver_lookup", elapsed_ms(t0));
+
+    // Flux normalization: the area-weighted mean over the receiver equals the irradiance a flat
+    // interface would transmit onto it (from the light and the interface only, never the reference).
+    double scale = 1.0;
+    if (lookup.normalize_flux && chart) {
+        t0 = std::chrono::steady_clock::now();
+        double sum = 0.0, target = 0.0, area = 0.0;
+        for (int j = 0; j < chart->height(); ++j)
+            for (int i = 0; i < chart->width(); ++i) {
+                const double a = chart->bin_area(i, j);
+                const double v = receiver.at(i, j);
+                if (std::isfinite(v)) sum += a * v;
+                target += a * flat_transmitted_irradiance(scene, lookup.ior,
+                                                          chart->normal((i + 0.5) / chart->width(), (j + 0.5) / chart->height()));
+                area += a;
+            }
+        if (sum > 0.0 && area > 0.0) scale = target / sum;
+        out.stages_ms.emplace_back("normalize", elapsed_ms(t0));
+    }
+    if (request.receiver) {
+        for (float& v : receiver.pixels) {
+            v = static_cast<float>(v * scale);
+            if (!std::isfinite(v)) {
+                ++nonfinite;
+                v = 0.0f;
+            }
+        }
+        out.receiver = std::move(receiver);
+    }
+
+    if (request.camera) {
+        t0 = std::chrono::steady_clock::now();
+        const CameraGBuffer& gb = *request.camera;
+        out.camera = Image(gb.width, gb.height, 1);
+        std::vector<std::int64_t> row_outside(static_cast<std::size_t>(std::max(gb.height, 0))), row_clamped(row_outside.size()),
+            row_nonfinite(row_outside.size());
+        tbb::parallel_for(0, gb.height, [&](int y) {
+            for (int x = 0; x < gb.width; ++x) {
+                const std::size_t idx = gb.index(x, y);
+                if (!gb.covered[idx]) continue;
+                float v;
+                bool c;
+                if (!lookup_value(ctx, glm::dvec3(gb.position[idx]), v, c)) ++row_outside[static_cast<std::size_t>(y)];
+                if (c) ++row_clamped[static_cast<std::size_t>(y)];
+                v = static_cast<float>(v * scale);
+                if (!std::isfinite(v)) {
+                    ++row_nonfinite[static_cast<std::size_t>(y)];
+                    v = 0.0f;
+                }
+                out.camera.at(x, y) = v;
+            }
+        });
+        for (std::size_t y = 0; y < row_outside.size(); ++y) {
+            outside += row_outside[y];
+            clamped += row_clamped[y];
+            nonfinite += row_nonfinite[y];
+        }
+        out.stages_ms.emplace_back("camera_lookup", elapsed_ms(t0));
+    }
+    out.health.add("outside_volume", outside);
+    out.health.add("clamped", clamped);
+    out.health.add("nonfinite", nonfinite);
+    return out;
+}
+
+}  // namespace caustics

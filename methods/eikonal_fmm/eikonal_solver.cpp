@@ -1,0 +1,343 @@
+// Eikonal solvers for Mercier's 3-D caustic texture (Mercier 2013, Sec. 3, Algorithms 1 and 2).
+#include "eikonal_solver.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include <tbb/parallel_for.h>
+
+namespace caustics::eikonal {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+double ms_since(std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+struct AxisTerm {
+    double v1;     // nearest upwind neighbour
+    double alpha;  // 1 (first order) or 9/4 (second order)
+    double b;      // phi_1 or (4 phi_1 - phi_2) / 3
+};
+
+// Upwind update of cell c: solves sum_a alpha_a (phi - b_a)^2 = (F h)^2 over the axes with a usable
+// neighbour (Sethian 1996; second order after Rickett & Fomel 2000: one-sided 3-point differences
+// (3 phi - 4 phi_1 + phi_2) / 2h where the second upwind neighbour is usable and not larger).
+// Drops the largest neighbours until the root is upwind of every neighbour it uses.
+template <class Usable>
+inline double local_update(const double* phi, const Usable& usable, const VolumeShape& s, int i, int j, int k,
+                           std::size_t c, double fh, int order) {
+    AxisTerm t[3];
+    int m = 0;
+    const int coord[3] = {i, j, k};
+    const int n[3] = {s.nx, s.ny, s.nz};
+    const std::ptrdiff_t stride[3] = {1, s.nx, static_cast<std::ptrdiff_t>(s.nx) * s.ny};
+    for (int a = 0; a < 3; ++a) {
+        double best = kInf;
+        int dir = 0;
+        if (coord[a] > 0) {
+            const std::size_t nb = c - stride[a];
+            if (usable(nb) && phi[nb] < best) { best = phi[nb]; dir = -1; }
+        }
+        if (coord[a] + 1 < n[a]) {
+            const std::size_t nb = c + stride[a];
+            if (usable(nb) && phi[nb] < best) { best = phi[nb]; dir = 1; }
+        }
+        if (dir == 0) continue;
+        AxisTerm term{best, 1.0, best};
+        if (order >= 2) {
+            const int c2 = coord[a] + 2 * dir;
+            if (c2 >= 0 && c2 < n[a]) {
+                const std::size_t nb2 = static_cast<std::size_t>(static_cast<std::ptrdiff_t>(c) + 2 * dir * stride[a]);
+                if (usable(nb2) && phi[nb2] <= best) {
+                    term.alpha = 2.25;
+                    term.b = (4.0 * best - phi[nb2]) / 3.0;
+                }
+            }
+        }
+        t[m++] = term;
+    }
+    if (m == 0) return kInf;
+    // Sort the (at most three) terms by their nearest neighbour.
+    if (m > 1 && t[1].v1 < t[0].v1) std::swap(t[0], t[1]);
+    if (m > 2 && t[2].v1 < t[1].v1) {
+        std::swap(t[1], t[2]);
+        if (t[1].v1 < t[0].v1) std::swap(t[0], t[1]);
+    }
+    for (int use = m; use >= 2; --use) {
+        double A = 0.0, B = 0.0, C = -fh * fh;
+        for (int q = 0; q < use; ++q) {
+            A += t[q].alpha;
+            B += t[q].alpha * t[q].b;
+            C += t[q].alpha * t[q].b * t[q].b;
+        }
+        const double disc = B * B - A * C;
+        if (disc < 0.0) continue;
+        const double x = (B + std::sqrt(disc)) / A;
+        if (x >= t[use - 1].v1) return x;
+    }
+    return t[0].b + fh / std::sqrt(t[0].alpha);
+}
+
+template <class F>
+inline void for_each_neighbour(const VolumeShape& s, int i, int j, int k, std::size_t c, F&& fn) {
+    const std::size_t sy = static_cast<std::size_t>(s.nx), sz = static_cast<std::size_t>(s.nx) * s.ny;
+    if (i > 0) fn(i - 1, j, k, c - 1);
+    if (i + 1 < s.nx) fn(i + 1, j, k, c + 1);
+    if (j > 0) fn(i, j - 1, k, c - sy);
+    if (j + 1 < s.ny) fn(i, j + 1, k, c + sy);
+    if (k > 0) fn(i, j, k - 1, c - sz);
+    if (k + 1 < s.nz) fn(i, j, k + 1, c + sz);
+}
+
+}  // namespace
+
+void march(Field& f, int order, Stats& stats) {
+    const VolumeShape& s = f.shape;
+    const double h = s.spacing;
+    const std::size_t count = s.size();
+    std::vector<std::uint8_t> accepted(f.frozen);
+    double* phi = f.phi.data();
+    auto usable = [&](std::size_t n) { return accepted[n] != 0; };
+    auto cost = [&](std::size_t c) { return f.cost ? static_cast<double>((*f.cost)[c]) : 1.0; };
+    CellHeap heap(count);
+    for (std::size_t c = 0; c < count; ++c) {
+        if (!accepted[c]) phi[c] = kInf;
+    }
+    // Trial cells: every non-frozen neighbour of the frozen set.
+    for (int k = 0; k < s.nz; ++k)
+        for (int j = 0; j < s.ny; ++j)
+            for (int i = 0; i < s.nx; ++i) {
+                const std::size_t c = s.index(i, j, k);
+                if (accepted[c]) continue;
+                bool near = false;
+                for_each_neighbour(s, i, j, k, c, [&](int, int, int, std::size_t n) { near = near || accepted[n]; });
+                if (!near) continue;
+                const double v = local_update(phi, usable, s, i, j, k, c, cost(c) * h, order);
+                if (v < phi[c]) {
+                    phi[c] = v;
+                    heap.push_or_decrease(c, v);
+                }
+            }
+    const std::size_t sy = static_cast<std::size_t>(s.nx), sz = sy * static_cast<std::size_t>(s.ny);
+    while (!heap.empty()) {
+        double key;
+        const std::size_t c = heap.pop(key);
+        accepted[c] = 1;
+        const int k = static_cast<int>(c / sz), j = static_cast<int>((c % sz) / sy), i = static_cast<int>(c % sy);
+        if (f.carry) {
+            // Extension of a cell quantity along the front (Algorithm 2, first pass): copy it from the
+            // accepted neighbour that reached this cell first.
+            double best = kInf;
+            std::size_t from = c;
+            for_each_neighbour(s, i, j, k, c, [&](int, int, int, std::size_t n) {
+                if (n != c && accepted[n] && phi[n] < best && n != c) { best = phi[n]; from = n; }
+            });
+            if (from != c) (*f.carry)[c] = (*f.carry)[from];
+        }
+        for_each_neighbour(s, i, j, k, c, [&](int ni, int nj, int nk, std::size_t n) {
+            if (accepted[n]) return;
+            const double v = local_update(phi, usable, s, ni, nj, nk, n, cost(n) * h, order);
+            if (v < phi[n]) {
+                phi[n] = v;
+                heap.push_or_decrease(n, v);
+            }
+        });
+    }
+}
+
+void sweep_down(Field& f, int order, Stats& stats) {
+    const VolumeShape& s = f.shape;
+    const double h = s.spacing;
+    double* phi = f.phi.data();
+    const std::uint8_t* frozen = f.frozen.data();
+    for (std::size_t c = 0; c < s.size(); ++c)
+        if (!frozen[c]) phi[c] = kInf;
+    auto usable = [&](std::size_t n) { return phi[n] < kInf; };
+    // Changes below 1e-7 h move the Laplacian by < 1e-7 / h: far below any caustic signal.
+    const double tol = 1e-7 * h;
+    constexpr int kMaxPasses = 64;
+    for (int k = s.nz - 1; k >= 0; --k) {
+        bool converged = false;
+        for (int pass = 0; pass < kMaxPasses && !converged; ++pass) {
+            const bool i_up = (pass & 1) == 0, j_up = (pass & 2) == 0;
+            bool changed = false;
+            for (int jj = 0; jj < s.ny; ++jj) {
+                const int j = j_up ? jj : s.ny - 1 - jj;
+                for (int ii = 0; ii < s.nx; ++ii) {
+                    const int i = i_up ? ii : s.nx - 1 - ii;
+                    const std::size_t c = s.index(i, j, k);
+                    if (frozen[c]) continue;
+                    const double fh = (f.cost ? static_cast<double>((*f.cost)[c]) : 1.0) * h;
+                    const double v = local_update(phi, usable, s, i, j, k, c, fh, order);
+                    if (v < phi[c] - tol) {
+                        phi[c] = v;
+                        changed = true;
+                    }
+                }
+            }
+            converged = !changed;
+        }
+        if (!converged) ++stats.not_converged;
+    }
+}
+
+namespace {
+
+// Algorithm 2 (Mercier 2013, Sec. 3.2): solve the side faces of the volume first, with propagation
+// costs that make the face's solution match an interface extended linearly past the face, and freeze
+// them for the 3-D solve. On a face normal to axis a the front moves within the face with slowness
+// |grad phi projected on the face| = sqrt(1 - n_a^2) (n: unit interface normal); on a vertical edge
+// with slowness |n_z| (the paper's alpha = 1 / cos theta as a speed).
+void paper_boundary(Field& f, const std::vector<glm::dvec2>& column_gradient, int order, Stats& stats) {
+    const VolumeShape& s = f.shape;
+    const double h = s.spacing;
+    auto normal = [&](int i, int j) {
+        const glm::dvec2 g = column_gradient[static_cast<std::size_t>(j) * s.nx + i];
+        return glm::normalize(glm::dvec3(-g.x, -g.y, 1.0));
+    };
+    // 1-D boundaries: the four vertical edges.
+    for (int j : {0, s.ny - 1})
+        for (int i : {0, s.nx - 1}) {
+            if ((i == s.nx - 1 && i != 0 && s.nx == 1) || (j == s.ny - 1 && j != 0 && s.ny == 1)) continue;
+            const double fz = std::fabs(normal(i, j).z);
+            int k = s.nz - 1;
+            while (k >= 0 && f.frozen[s.index(i, j, k)]) --k;
+            for (; k >= 0; --k) {
+                const std::size_t c = s.index(i, j, k);
+                if (f.frozen[c]) continue;
+                const double above = k + 1 < s.nz ? f.phi[s.index(i, j, k + 1)] : 0.0;
+                f.phi[c] = above + h * fz;
+                f.frozen[c] = 1;
+            }
+        }
+    // 2-D boundaries: the four side faces, each as a grid that is one cell thick.
+    for (int axis = 0; axis < 2; ++axis) {
+        const int n_axis = axis == 0 ? s.nx : s.ny;
+        for (int side : {0, n_axis - 1}) {
+            if (side != 0 && n_axis == 1) continue;
+            Field face;
+            face.shape = s;
+            if (axis == 0) face.shape.nx = 1; else face.shape.ny = 1;
+            const VolumeShape& fs = face.shape;
+            face.phi.resize(fs.size());
+            face.frozen.resize(fs.size());
+            std::vector<float> slowness(fs.size());
+            auto full_index = [&](int a, int b, int k) {  // a, b: the face's in-plane horizontal index
+                return axis == 0 ? s.index(side, a, k) : s.index(a, side, k);
+            };
+            const int n_in = axis == 0 ? s.ny : s.nx;
+            for (int k = 0; k < s.nz; ++k)
+                for (int a = 0; a < n_in; ++a) {
+                    const std::size_t c = full_index(a, 0, k);
+                    const std::size_t fc = axis == 0 ? fs.index(0, a, k) : fs.index(a, 0, k);
+                    face.phi[fc] = f.phi[c];
+                    face.frozen[fc] = f.frozen[c];
+                    const glm::dvec3 nrm = axis == 0 ? normal(side, a) : normal(a, side);
+                    const double na = axis == 0 ? nrm.x : nrm.y;
+                    slowness[fc] = static_cast<float>(std::sqrt(std::max(1.0 - na * na, 1e-6)));
+                }
+            // First pass: extend the interface cells' costs over the face at unit cost.
+            face.carry = &slowness;
+            march(face, 1, stats);
+            // Second pass: the face's eikonal solution with those costs.
+            face.carry = nullptr;
+            face.cost = &slowness;
+            march(face, order, stats);
+            for (int k = 0; k < s.nz; ++k)
+                for (int a = 0; a < n_in; ++a) {
+                    const std::size_t c = full_index(a, 0, k);
+                    const std::size_t fc = axis == 0 ? fs.index(0, a, k) : fs.index(a, 0, k);
+                    f.phi[c] = face.phi[fc];
+                    f.frozen[c] = 1;
+                }
+        }
+    }
+}
+
+}  // namespace
+
+VolumeD solve(const HeightField& hf, const VolumeShape& shape, const Options& options, Stats& stats) {
+    auto t0 = std::chrono::steady_clock::now();
+    const VolumeShape& s = shape;
+    const double h = s.spacing;
+    Field f;
+    f.shape = s;
+    f.phi.assign(s.size(), kInf);
+    f.frozen.assign(s.size(), 0);
+    // The interface over every column centre.
+    std::vector<double> column_height(static_cast<std::size_t>(s.nx) * s.ny);
+    std::vector<glm::dvec2> column_gradient(column_height.size());
+    tbb::parallel_for(0, s.ny, [&](int j) {
+        for (int i = 0; i < s.nx; ++i) {
+            const glm::dvec3 p = s.center(i, j, 0);
+            const std::size_t col = static_cast<std::size_t>(j) * s.nx + i;
+            column_height[col] = extended_height(hf, p.x, p.y, &column_gradient[col]);
+        }
+    });
+    const double band = 2.0 * h;
+    tbb::parallel_for(0, s.nz, [&](int k) {
+        for (int j = 0; j < s.ny; ++j)
+            for (int i = 0; i < s.nx; ++i) {
+                const std::size_t col = static_cast<std::size_t>(j) * s.nx + i;
+                const std::size_t c = s.index(i, j, k);
+                const glm::dvec3 p = s.center(i, j, k);
+                const glm::dvec2 g = column_gradient[col];
+                const double gap = p.z - column_height[col];
+                const double estimate = -gap / std::sqrt(1.0 + glm::dot(g, g));  // > 0 below
+                if (options.init == Init::Triangle && std::fabs(estimate) <= band) {
+                    f.phi[c] = signed_distance_to_interface(hf, p);
+                    f.frozen[c] = 1;
+                } else if (gap > 0.0) {
+                    // Air above the interface: frozen (light enters from the interface only), with an
+                    // approximate signed distance so the Laplacian is smooth across the interface.
+                    f.phi[c] = estimate;
+                    f.frozen[c] = 1;
+                }
+            }
+    });
+    if (options.init == Init::Vertex) {
+        // Mercier 2013, Algorithm 1: each interface vertex sets its cell to its distance to the centre.
+        for (int b = 0; b < hf.ny; ++b)
+            for (int a = 0; a < hf.nx; ++a) {
+                const glm::dvec3 v(hf.origin.x + a * hf.spacing.x, hf.origin.y + b * hf.spacing.y, hf.z(a, b));
+                const glm::dvec3 g = (v - s.origin) / h;
+                const int i = static_cast<int>(std::floor(g.x)), j = static_cast<int>(std::floor(g.y)),
+                          k = static_cast<int>(std::floor(g.z));
+                if (i < 0 || j < 0 || k < 0 || i >= s.nx || j >= s.ny || k >= s.nz) continue;
+                const std::size_t c = s.index(i, j, k);
+                const double d = glm::length(v - s.center(i, j, k));
+                if (!f.frozen[c] || f.phi[c] < 0.0) f.phi[c] = d;  // air estimate replaced by the vertex
+                else f.phi[c] = std::min(f.phi[c], d);
+                f.frozen[c] = 1;
+            }
+    }
+    stats.init_ms += ms_since(t0);
+    if (options.boundary == Boundary::Paper) {
+        t0 = std::chrono::steady_clock::now();
+        paper_boundary(f, column_gradient, options.order, stats);
+        stats.boundary_ms += ms_since(t0);
+    }
+    t0 = std::chrono::steady_clock::now();
+    if (options.solver == Solver::Fmm) march(f, options.order, stats);
+    else sweep_down(f, options.order, stats);
+    // Cells no front reached (none in a connected grid) take the largest finite value; counted.
+    double largest = 0.0;
+    for (double v : f.phi)
+        if (std::isfinite(v)) largest = std::max(largest, v);
+    for (double& v : f.phi)
+        if (!std::isfinite(v)) {
+            ++stats.not_converged;
+            v = largest;
+        }
+    stats.solve_ms += ms_since(t0);
+    VolumeD out;
+    out.shape = s;
+    out.data = std::move(f.phi);
+    return out;
+}
+
+}  // namespace caustics::eikonal

@@ -1,0 +1,252 @@
+// Surface resampling, the depth-slice intensity table and its lookup: see wave_field_table.hpp.
+#include "wave_field_table.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+namespace caustics::wave_optics {
+
+namespace {
+
+// Raised-cosine window: 0 at the border, 1 beyond `band` inside, for u in [0, L).
+double taper_window(double u, double length, double band) {
+    const double d = std::min(u, length - u);
+    if (d >= band) return 1.0;
+    return 0.5 - 0.5 * std::cos(std::numbers::pi * std::max(d, 0.0) / band);
+}
+
+// Periodic index into [0, n).
+inline int wrap(int i, int n) {
+    i %= n;
+    return i < 0 ? i + n : i;
+}
+
+}  // namespace
+
+WaveFieldTable::WaveFieldTable(int nx, int ny, bool rgb) : nx_(nx), ny_(ny), rgb_(rgb) {
+    surface_.height.assign(static_cast<std::size_t>(nx) * ny, 0.0f);
+}
+
+const SurfaceSamples& WaveFieldTable::resample(const HeightField& hf, double lx, double ly) {
+    // Periodicity: flagged by the generator, or opposite edges equal to within 1e-3 of the height range.
+    float hmin = hf.height.empty() ? 0.0f : hf.height.front(), hmax = hmin;
+    for (float h : hf.height) {
+        hmin = std::min(hmin, h);
+        hmax = std::max(hmax, h);
+    }
+    double mismatch = 0.0, edge_sum = 0.0;
+    std::size_t edge_count = 0;
+    for (int j = 0; j < hf.ny; ++j) {
+        mismatch = std::max(mismatch, static_cast<double>(std::abs(hf.z(0, j) - hf.z(hf.nx - 1, j))));
+        edge_sum += hf.z(0, j) + hf.z(hf.nx - 1, j);
+        edge_count += 2;
+    }
+    for (int i = 0; i < hf.nx; ++i) {
+        mismatch = std::max(mismatch, static_cast<double>(std::abs(hf.z(i, 0) - hf.z(i, hf.ny - 1))));
+        edge_sum += hf.z(i, 0) + hf.z(i, hf.ny - 1);
+        edge_count += 2;
+    }
+    const double tolerance = std::max(1e-3 * (hmax - hmin), 1e-9);
+    surface_.periodic = hf.periodic || mismatch <= tolerance;
+    const double edge_mean = edge_sum / std::max<std::size_t>(edge_count, 1);
+    const double band_x = lx / 16.0, band_y = ly / 16.0;
+    surface_.taper_band = surface_.periodic ? 0.0 : std::min(band_x, band_y);
+
+    // Bilinear weights per grid column / row: grid sample i sits at vertex coordinate i (nx-1) / N.
+    std::vector<int> i0(static_cast<std::size_t>(nx_)), j0(static_cast<std::size_t>(ny_));
+    std::vector<float> fx(static_cast<std::size_t>(nx_)), fy(static_cast<std::size_t>(ny_));
+    std::vector<float> wx(static_cast<std::size_t>(nx_), 1.0f), wy(static_cast<std::size_t>(ny_), 1.0f);
+    for (int i = 0; i < nx_; ++i) {
+        const double g = static_cast<double>(i) * (hf.nx - 1) / nx_;
+        const int a = std::min(static_cast<int>(g), std::max(hf.nx - 2, 0));
+        i0[static_cast<std::size_t>(i)] = a;
+        fx[static_cast<std::size_t>(i)] = static_cast<float>(g - a);
+        if (!surface_.periodic) wx[static_cast<std::size_t>(i)] = static_cast<float>(taper_window(i * lx / nx_, lx, band_x));
+    }
+    for (int j = 0; j < ny_; ++j) {
+        const double g = static_cast<double>(j) * (hf.ny - 1) / ny_;
+        const int a = std::min(static_cast<int>(g), std::max(hf.ny - 2, 0));
+        j0[static_cast<std::size_t>(j)] = a;
+        fy[static_cast<std::size_t>(j)] = static_cast<float>(g - a);
+        if (!surface_.periodic) wy[static_cast<std::size_t>(j)] = static_cast<float>(taper_window(j * ly / ny_, ly, band_y));
+    }
+    const int step_x = hf.nx > 1 ? 1 : 0;
+    const int step_y = hf.ny > 1 ? 1 : 0;
+    const float e = static_cast<float>(edge_mean);
+    const bool taper = !surface_.periodic;
+    std::vector<double> row_sum(static_cast<std::size_t>(ny_), 0.0);
+    float* out = surface_.height.data();
+    tbb::parallel_for(tbb::blocked_range<int>(0, ny_, 8), [&](const tbb::blocked_range<int>& r) {
+        for (int j = r.begin(); j < r.end(); ++j) {
+            const std::size_t ju = static_cast<std::size_t>(j);
+            const float* row0 = hf.height.data() + static_cast<std::size_t>(j0[ju]) * hf.nx;
+            const float* row1 = row0 + static_cast<std::size_t>(step_y) * hf.nx;
+            const float b = fy[ju];
+            float* dst = out + ju * nx_;
+            double sum = 0.0;
+            for (int i = 0; i < nx_; ++i) {
+                const std::size_t iu = static_cast<std::size_t>(i);
+                const int a = i0[iu];
+                const float f = fx[iu];
+                const float top = row0[a] + f * (row0[a + step_x] - row0[a]);
+                const float bottom = row1[a] + f * (row1[a + step_x] - row1[a]);
+                float h = top + b * (bottom - top);
+                if (taper) h = e + wx[iu] * wy[ju] * (h - e);
+                dst[i] = h;
+                sum += h;
+            }
+            row_sum[ju] = sum;
+        }
+    });
+    double total = 0.0;
+    for (double s : row_sum) total += s;
+    const double level = total / (static_cast<double>(nx_) * ny_);
+    surface_.level = level;
+    const float lf = static_cast<float>(level);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, surface_.height.size(), 1 << 14),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t k = r.begin(); k < r.end(); ++k) out[k] -= lf;
+    });
+    return surface_;
+}
+
+void WaveFieldTable::begin(int slices) {
+    slices_ = slices;
+    const std::size_t need = static_cast<std::size_t>(rgb_ ? 4 : 1) * slices * nx_ * ny_;
+    if (data_.size() < need) data_.resize(need);
+}
+
+float* WaveFieldTable::slice_mut(int s, int channel) {
+    return data_.data() + (static_cast<std::size_t>(channel) * slices_ + s) * nx_ * ny_;
+}
+
+const float* WaveFieldTable::slice(int s, int channel) const {
+    return data_.data() + (static_cast<std::size_t>(channel) * slices_ + s) * nx_ * ny_;
+}
+
+int WaveFieldTable::targets(int slice, int sample, float mono_weight, const float rgb[3], IntensityTarget* t) {
+    int count = 0;
+    t[count++] = {slice_mut(slice, 0), mono_weight, sample == 0};
+    if (rgb_)
+        for (int c = 0; c < 3; ++c) t[count++] = {slice_mut(slice, c + 1), rgb[c], sample == 0};
+    return count;
+}
+
+void WaveFieldTable::blur(double sigma_m, double lx, double ly) {
+    // Separable, periodic (the table is one period of a tiling). Kernel radius 3 sigma, at most half
+    // the period.
+    auto kernel = [](double sigma_cells, int n) {
+        const int radius = std::min(static_cast<int>(std::ceil(3.0 * sigma_cells)), (n - 1) / 2);
+        std::vector<float> w(static_cast<std::size_t>(2 * radius + 1));
+        double sum = 0.0;
+        for (int i = -radius; i <= radius; ++i) {
+            const double v = std::exp(-0.5 * i * i / (sigma_cells * sigma_cells));
+            w[static_cast<std::size_t>(i + radius)] = static_cast<float>(v);
+            sum += v;
+        }
+        for (float& v : w) v = static_cast<float>(v / sum);
+        return w;
+    };
+    const std::vector<float> kx = kernel(sigma_m / (lx / nx_), nx_), ky = kernel(sigma_m / (ly / ny_), ny_);
+    const int rx = static_cast<int>(kx.size() / 2), ry = static_cast<int>(ky.size() / 2);
+    std::vector<float> tmp(static_cast<std::size_t>(nx_) * ny_);
+    const int channels = rgb_ ? 4 : 1;
+    for (int c = 0; c < channels; ++c)
+        for (int s = 0; s < slices_; ++s) {
+            float* t = slice_mut(s, c);
+            tbb::parallel_for(0, ny_, [&](int j) {
+                const float* row = t + static_cast<std::size_t>(j) * nx_;
+                float* dst = tmp.data() + static_cast<std::size_t>(j) * nx_;
+                for (int i = 0; i < nx_; ++i) {
+                    float acc = 0.0f;
+                    for (int d = -rx; d <= rx; ++d) acc += kx[static_cast<std::size_t>(d + rx)] * row[wrap(i + d, nx_)];
+                    dst[i] = acc;
+                }
+            });
+            tbb::parallel_for(0, ny_, [&](int j) {
+                float* dst = t + static_cast<std::size_t>(j) * nx_;
+                std::fill(dst, dst + nx_, 0.0f);
+                for (int d = -ry; d <= ry; ++d) {
+                    const float w = ky[static_cast<std::size_t>(d + ry)];
+                    const float* src = tmp.data() + static_cast<std::size_t>(wrap(j + d, ny_)) * nx_;
+                    for (int i = 0; i < nx_; ++i) dst[i] += w * src[i];
+                }
+            });
+        }
+}
+
+void WaveFieldTable::lookup(const LookupGeometry& geo, const std::vector<ShadePoint>& points,
+                            std::vector<glm::vec4>& values, LookupCounters& counters) const {
+    const int channels = rgb_ ? 4 : 1;
+    const int slices = static_cast<int>(geo.depths.size());
+    const double dx = geo.lx / nx_, dy = geo.ly / ny_;
+    const double cos_t = std::max(1e-9, -geo.refracted.z);
+    const glm::dvec2 beam_walk(geo.refracted.x / cos_t, geo.refracted.y / cos_t);
+    const double z0 = slices > 0 ? geo.depths.front() : 0.0;
+    const double z1 = slices > 0 ? geo.depths.back() : 0.0;
+    std::vector<std::int64_t> not_covered(points.size(), 0), tapered(points.size(), 0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 1024),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t k = r.begin(); k < r.end(); ++k) {
+            values[k] = glm::vec4(0.0f);
+            const ShadePoint& p = points[k];
+            const double z = geo.level - p.position.z;
+            if (slices == 0 || !(z > 0.0)) {
+                not_covered[k] = 1;
+                continue;
+            }
+            // Where the light reaching p crossed the mean surface (geometric beam), and where the
+            // propagator's shifted frame holds p's intensity.
+            const glm::dvec2 entry = glm::dvec2(p.position) - z * beam_walk;
+            const glm::dvec2 rel = entry - geo.origin;
+            if (rel.x < 0.0 || rel.y < 0.0 || rel.x > geo.lx || rel.y > geo.ly) {
+                not_covered[k] = 1;
+                continue;
+            }
+            if (geo.taper_band > 0.0 &&
+                std::min({rel.x, rel.y, geo.lx - rel.x, geo.ly - rel.y}) < geo.taper_band)
+                tapered[k] = 1;
+            const glm::dvec2 table = glm::dvec2(p.position) - z * geo.walk - geo.origin;
+            const double gx = table.x / dx, gy = table.y / dy;
+            const double fxf = std::floor(gx), fyf = std::floor(gy);
+            const float ax = static_cast<float>(gx - fxf), ay = static_cast<float>(gy - fyf);
+            const int xa = wrap(static_cast<int>(fxf), nx_), xb = wrap(xa + 1, nx_);
+            const int ya = wrap(static_cast<int>(fyf), ny_), yb = wrap(ya + 1, ny_);
+            int sa = 0, sb = 0;
+            float as = 0.0f;
+            if (slices > 1 && z1 > z0) {
+                const double u = std::clamp((z - z0) / (z1 - z0) * (slices - 1), 0.0, static_cast<double>(slices - 1));
+                sa = std::min(static_cast<int>(u), slices - 2);
+                sb = sa + 1;
+                as = static_cast<float>(u - sa);
+            }
+            const double facing = std::max(0.0, -glm::dot(geo.refracted, p.normal)) / cos_t;
+            const float scale = static_cast<float>(geo.irradiance * std::exp(-geo.absorption * z / cos_t) * facing);
+            for (int c = 0; c < channels; ++c) {
+                auto bilinear = [&](int s) {
+                    const float* t = slice(s, c);
+                    const float v00 = t[static_cast<std::size_t>(ya) * nx_ + xa];
+                    const float v10 = t[static_cast<std::size_t>(ya) * nx_ + xb];
+                    const float v01 = t[static_cast<std::size_t>(yb) * nx_ + xa];
+                    const float v11 = t[static_cast<std::size_t>(yb) * nx_ + xb];
+                    const float top = v00 + ax * (v10 - v00);
+                    const float bottom = v01 + ax * (v11 - v01);
+                    return top + ay * (bottom - top);
+                };
+                float v = bilinear(sa);
+                if (sb != sa) v += as * (bilinear(sb) - v);
+                values[k][c] = scale * v;
+            }
+        }
+    });
+    for (std::size_t k = 0; k < points.size(); ++k) {
+        counters.not_covered += not_covered[k];
+        counters.tapered += tapered[k];
+    }
+}
+
+}  // namespace caustics::wave_optics

@@ -1,0 +1,78 @@
+#pragma once
+// The wave_optics method's per-frame data around the propagator: the surface resampled to the FFT grid
+// (made periodic), the intensity table (depth slices x grid x grid, mono plus optional RGB) and its
+// lookup at world points (Stam 1996: "storing caustic textures for different depths in a three
+// dimensional table").
+#include <cstdint>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "heightfield.hpp"
+#include "wave_propagator.hpp"
+
+namespace caustics::wave_optics {
+
+struct SurfaceSamples {
+    std::vector<float> height;   // grid x grid heights above the mean level [m]
+    double level = 0.0;          // world z of the mean level (the phase screen's reference plane)
+    bool periodic = true;        // false: the edges did not match and the border band was tapered
+    double taper_band = 0.0;     // width of the tapered border band [m] (non-periodic surfaces)
+};
+
+struct ShadePoint {
+    glm::dvec3 position{0.0};
+    glm::dvec3 normal{0.0, 0.0, 1.0};
+};
+
+struct LookupGeometry {
+    glm::dvec2 origin{0.0};        // world x, y of grid sample (0, 0)
+    double lx = 1.0, ly = 1.0;     // period [m]
+    double level = 0.0;            // water mean level
+    std::vector<double> depths;    // slice depths, ascending, evenly spaced
+    glm::dvec2 walk{0.0};          // lateral walk per depth removed by the propagator
+    glm::dvec3 refracted{0, 0, -1};  // refracted beam direction (mean index)
+    double taper_band = 0.0;
+    double irradiance = 1.0;       // transmitted irradiance on a horizontal plane, E0 cos(theta_i) T
+    double absorption = 0.0;       // Beer-Lambert Ka [1/m] of the water
+};
+
+struct LookupCounters {
+    std::int64_t not_covered = 0;  // above the water, or lit through a point outside the surface
+    std::int64_t tapered = 0;      // lit through the tapered border band
+};
+
+class WaveFieldTable {
+public:
+    WaveFieldTable(int nx, int ny, bool rgb);
+
+    // Resamples `hf` (bilinear) to the grid over its rectangle lx x ly. Surfaces flagged periodic, or
+    // whose opposite edges match to 1e-3 of their height range, are used as they are; others are
+    // tapered to their edge mean over a raised-cosine border band of 1/16 of the period.
+    const SurfaceSamples& resample(const HeightField& hf, double lx, double ly);
+
+    // Sizes the table for `slices` depths (contents undefined until the first sample assigns them).
+    void begin(int slices);
+    // Fills `targets` (up to 4) for wavelength sample `sample` at `slice`: mono with weight
+    // `mono_weight`, RGB with `rgb`; sample 0 assigns, later ones accumulate. Returns the count.
+    int targets(int slice, int sample, float mono_weight, const float rgb[3], IntensityTarget* targets);
+    // Periodic separable Gaussian blur of every slice and channel, sigma in metres (period lx x ly).
+    void blur(double sigma_m, double lx, double ly);
+    // E_c at each point: (mono, r, g, b).
+    void lookup(const LookupGeometry& geo, const std::vector<ShadePoint>& points, std::vector<glm::vec4>& values,
+                LookupCounters& counters) const;
+
+    // Slice s of channel c (0 mono, 1..3 RGB): nx * ny intensities (1 = the incident wave).
+    const float* slice(int s, int channel = 0) const;
+    int slices() const { return slices_; }
+
+private:
+    int nx_, ny_;
+    bool rgb_;
+    int slices_ = 0;
+    std::vector<float> data_;   // [channel][slice][ny][nx]
+    SurfaceSamples surface_;
+    float* slice_mut(int s, int channel);
+};
+
+}  // namespace caustics::wave_optics

@@ -1,0 +1,395 @@
+// wave_optics: caustics as the intensity of a wave (Stam 1996, "Random Caustics: Natural Textures and
+// Wave Theory Revisited"; Moravec 1981). A plane wave crosses the water surface, which delays its phase
+// by the optical path difference (phi = k0 (n cos theta_t - cos theta_i) h, = k0 (n - 1) h at normal
+// incidence), then propagates freely through the water to the receiver as a multiplication by a filter
+// in the Fourier domain. The intensity |u|^2, scaled by the transmitted irradiance, is the caustic
+// irradiance. See wave_propagator.hpp for the propagators and their band limit.
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <numbers>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "errors.hpp"
+#include "fft.hpp"
+#include "registry.hpp"
+#include "timing.hpp"
+#include "wave_field_table.hpp"
+#include "wave_propagator.hpp"
+
+namespace caustics::wave_optics {
+
+namespace {
+
+constexpr const char* kName = "wave_optics";
+
+const char* kDoc =
+    "Stam 1996 wave optics: the water surface is a phase screen phi = k0 (n cos t_t - cos t_i) h on a "
+    "grid x grid FFT grid over one period of the surface; the wave propagates to the receiver depth by "
+    "a Fourier-domain transfer function (angular spectrum, band-limited after Matsushima & Shimobaba "
+    "2009 so the sampled filter is not aliased, or the paraxial Fresnel filter) and its intensity, times "
+    "the transmitted irradiance, is E_c (radiometric: mean intensity = E0 cos t_i T exp(-Ka path) by "
+    "Parseval). Needs one directional light and one height-field dielectric surface, and no other "
+    "specular object. grid must be a product of 2, 3, 5, 7 (FFTW's fast sizes; other sizes are refused "
+    "with the nearest valid ones). iterations has no meaning here: its only valid value is 1. "
+    "wavelength is the wavelength in the water; 0 = auto, two grid spacings (Stam/Moravec); shorter than "
+    "two grid spacings is refused. wavelengths > 1 averages that many wavelengths over [lambda, 2 lambda] "
+    "(reduces spurious diffraction; with material dispersion the index spans ior + dispersion (shortest) "
+    "to ior (longest)) and fills receiver_rgb. Oblique light: a linear phase ramp snapped to the nearest "
+    "frequency the periodic grid holds (health carrier_error_urad: the angular error in micro-radians). "
+    "Non-periodic surfaces (edges that do not match) are tapered to their edge mean over a border band of "
+    "1/16 of the period (health nonperiodic_surface = 1, tapered_lookups = receiver points lit through "
+    "the band). depth_slices > 1 tabulates the intensity at that many depths between the shallowest and "
+    "deepest receiver point and looks it up trilinearly (Stam); with 1 slice every point uses the mid "
+    "depth (health depth_mismatch counts points more than 1 um off it). Health: sampling_violations "
+    "(propagations whose sampling criterion failed: Fresnel z > L^2 / (lambda N); angular spectrum: the "
+    "band limit removed more than 1 ppm of the energy), band_limited_ppm, evanescent_ppm, "
+    "phase_aliased_cells (phase step > pi between neighbouring grid cells), not_covered (points above "
+    "the water or lit from outside the surface's footprint). Transfer functions are cached per depth "
+    "and wavelength; walls shadowing the light are ignored.";
+
+std::vector<ParamSpec> param_table() {
+    std::vector<ParamSpec> p;
+    p.push_back({"grid", ParamType::Int, "512", 16, 4096, {},
+                 "FFT size (grid x grid) the surface period is resampled to; a product of 2, 3, 5, 7"});
+    p.push_back({"iterations", ParamType::Int, "1", 1, 1, {}, "no meaning for this method: only 1 is valid"});
+    p.push_back({"wavelength", ParamType::Float, "0", 0.0, 1e3, {},
+                 "wavelength in the water [m]; 0 = auto (two grid spacings); at least two grid spacings"});
+    p.push_back({"propagator", ParamType::Enum, "angular_spectrum", 0, 0, {"angular_spectrum", "fresnel"},
+                 "transfer function: band-limited angular spectrum, or paraxial Fresnel (unitary)"});
+    p.push_back({"wavelengths", ParamType::Int, "1", 1, 16, {},
+                 "wavelengths averaged over [lambda, 2 lambda] (colour with dispersion; receiver_rgb when > 1)"});
+    p.push_back({"blur", ParamType::Float, "0", 0.0, 1e3, {},
+                 "Gaussian blur of the intensity, standard deviation [m] on the receiver (0 = none)"});
+    p.push_back({"depth_slices", ParamType::Int, "1", 1, 64, {},
+                 "intensity slices between the shallowest and deepest receiver point, looked up trilinearly"});
+    return p;
+}
+
+std::string fast_size_hint(long long grid) {
+    const int g = static_cast<int>(grid);
+    int below = g;
+    while (below > 1 && !is_fast_fft_size(below)) --below;
+    const int above = next_fast_fft_size(g);
+    std::ostringstream s;
+    s << grid << " is not a product of 2, 3, 5 and 7 (FFTW plans such sizes slowly); nearest valid sizes: "
+      << below << " and " << above << " (e.g. 256, 384, 500, 512, 640, 720, 768, 1000, 1024, 2048)";
+    return s.str();
+}
+
+// Unpolarised Fresnel transmittance from air into a medium of index n at incidence cosine ci.
+double fresnel_transmittance(double ci, double n) {
+    const double si2 = std::max(0.0, 1.0 - ci * ci);
+    const double st2 = si2 / (n * n);
+    if (st2 >= 1.0) return 0.0;
+    const double ct = std::sqrt(1.0 - st2);
+    const double rs = (ci - n * ct) / (ci + n * ct);
+    const double rp = (n * ci - ct) / (n * ci + ct);
+    return 1.0 - 0.5 * (rs * rs + rp * rp);
+}
+
+// One wavelength sample of the band.
+struct Spectral {
+    double lambda = 0.0;        // in the water [m]
+    double n = 1.33;            // index of refraction
+    double phase_per_m = 0.0;   // phase screen: radians per metre of height
+    glm::dvec3 refracted{0.0, 0.0, -1.0};   // true refracted direction (mean surface)
+    double carrier_error_rad = 0.0;
+    float rgb[3] = {0, 0, 0};   // channel weights (each channel's weights sum to 1 over the samples)
+    std::unique_ptr<WavePropagator> propagator;
+};
+
+class WaveOpticsMethod final : public Method {
+public:
+    explicit WaveOpticsMethod(const ParamSet& p)
+        : grid_(static_cast<int>(p.get_int("grid"))), wavelength_(p.get_float("wavelength")),
+          fresnel_(p.get_enum("propagator") == "fresnel"),
+          samples_(static_cast<int>(p.get_int("wavelengths"))), blur_(p.get_float("blur")),
+          slices_(static_cast<int>(p.get_int("depth_slices"))) {
+        if (!is_fast_fft_size(grid_)) throw InputError(kName, "grid", fast_size_hint(grid_));
+    }
+
+    Capability capabilities(const Scene& scene) const override {
+        std::string why;
+        if (!find_setup(scene, why)) return Capability::no(why);
+        return Capability::yes();
+    }
+
+    void prepare(const Scene& scene) override {
+        std::string why;
+        if (!find_setup(scene, why)) throw InputError(scene.path, "objects", "wave_optics: " + why);
+        const Object& water = scene.objects[static_cast<std::size_t>(water_index_)];
+        const HeightFieldDesc& d = water.heightfield;
+        // The FFT grid spans the surface rectangle (one period of the tiling); the frame's HeightField
+        // has the same rectangle (size = resolution cells).
+        lx_ = d.size.x;
+        ly_ = d.size.y;
+        const double spacing = std::max(lx_, ly_) / grid_;
+        double lambda = wavelength_ > 0.0 ? wavelength_ : 2.0 * spacing;
+        if (lambda < 2.0 * spacing * (1.0 - 1e-9)) {
+            std::ostringstream s;
+            s << "wavelength " << wavelength_ << " m is below two grid spacings (" << 2.0 * spacing
+              << " m for grid " << grid_ << " over " << lx_ << " x " << ly_
+              << " m): use 0 (auto) or a length >= " << 2.0 * spacing << " m, or a larger grid";
+            throw InputError(kName, "wavelength", s.str());
+        }
+        lambda_ = lambda;
+        const Light& light = scene.lights.front();
+        const glm::dvec3 dir = glm::normalize(light.direction);
+        cos_i_ = -dir.z;
+        irradiance_ = light.irradiance;
+        absorption_ = water.material.absorption;
+        // Mean-index refracted direction: the lookup frame (every sample's propagator removes this
+        // walk), the irradiance projection and the absorption path.
+        const double n_mid = water.material.ior + 0.5 * (samples_ > 1 ? water.material.dispersion : 0.0);
+        const glm::dvec2 s_mid = glm::dvec2(dir.x, dir.y) / n_mid;
+        refracted_ = glm::dvec3(s_mid.x, s_mid.y, -std::sqrt(std::max(0.0, 1.0 - glm::dot(s_mid, s_mid))));
+        const glm::dvec2 beam_walk = glm::dvec2(refracted_.x, refracted_.y) / (-refracted_.z);
+        // Wavelength samples over [lambda, 2 lambda]; blue (short) gets the highest index.
+        spectral_.clear();
+        spectral_.resize(static_cast<std::size_t>(samples_));
+        const double n_lo = water.material.ior, dn = samples_ > 1 ? water.material.dispersion : 0.0;
+        double rgb_sum[3] = {0, 0, 0};
+        for (int m = 0; m < samples_; ++m) {
+            Spectral& sp = spectral_[static_cast<std::size_t>(m)];
+            const double t = samples_ > 1 ? static_cast<double>(m) / (samples_ - 1) : 0.0;
+            sp.lambda = lambda * (1.0 + t);
+            sp.n = n_lo + dn * (1.0 - t);
+            const double tc[3] = {1.0, 0.5, 0.0};   // R, G, B centres on the band
+            for (int c = 0; c < 3; ++c) {
+                sp.rgb[c] = samples_ > 1 ? static_cast<float>(std::max(0.0, 1.0 - std::abs(t - tc[c]) / 0.5)) : 1.0f;
+                rgb_sum[c] += sp.rgb[c];
+            }
+            // Snell at the mean surface: the transverse wave vector is continuous.
+            const glm::dvec2 s_t = glm::dvec2(dir.x, dir.y) / sp.n;    // sin(theta_t) vector
+            const double cos_t = std::sqrt(std::max(0.0, 1.0 - glm::dot(s_t, s_t)));
+            sp.refracted = glm::dvec3(s_t.x, s_t.y, -cos_t);
+            const double lambda0 = sp.n * sp.lambda;                  // vacuum wavelength
+            sp.phase_per_m = 2.0 * std::numbers::pi / lambda0 * (sp.n * cos_t - cos_i_);
+            // Carrier: transverse frequency s_t / lambda, snapped to the lattice 1 / L.
+            const glm::ivec2 bins(static_cast<int>(std::lround(s_t.x / sp.lambda * lx_)),
+                                  static_cast<int>(std::lround(s_t.y / sp.lambda * ly_)));
+            const glm::dvec2 snapped_s(bins.x * sp.lambda / lx_, bins.y * sp.lambda / ly_);
+            const double snapped_c = std::sqrt(std::max(0.0, 1.0 - glm::dot(snapped_s, snapped_s)));
+            const glm::dvec3 snapped(snapped_s.x, snapped_s.y, -snapped_c);
+            sp.carrier_error_rad = std::atan2(glm::length(glm::cross(snapped, sp.refracted)),
+                                              glm::dot(snapped, sp.refracted));
+            WaveSetup setup;
+            setup.nx = setup.ny = grid_;
+            setup.lx = lx_;
+            setup.ly = ly_;
+            setup.wavelength = sp.lambda;
+            setup.propagator = fresnel_ ? Propagator::Fresnel : Propagator::AngularSpectrum;
+            setup.carrier_bins = bins;
+            setup.shift_walk = beam_walk;
+            sp.propagator = std::make_unique<WavePropagator>(setup);
+        }
+        for (auto& sp : spectral_)
+            for (int c = 0; c < 3; ++c) sp.rgb[c] = rgb_sum[c] > 0.0 ? static_cast<float>(sp.rgb[c] / rgb_sum[c]) : 1.0f / samples_;
+        transmittance_ = scene.fresnel ? fresnel_transmittance(cos_i_, n_mid) : 1.0;
+        table_ = std::make_unique<WaveFieldTable>(grid_, grid_, samples_ > 1);
+    }
+
+    CausticOutput render(const FrameGeometry& frame, const RenderRequest& request) override;
+
+private:
+    bool find_setup(const Scene& scene, std::string& why) const;
+    int grid_;
+    double wavelength_;
+    bool fresnel_;
+    int samples_;
+    double blur_;
+    int slices_;
+    mutable int water_index_ = -1;
+    double lx_ = 1.0, ly_ = 1.0, lambda_ = 0.0;
+    double cos_i_ = 1.0, irradiance_ = 1.0, absorption_ = 0.0, transmittance_ = 1.0;
+    glm::dvec3 refracted_{0.0, 0.0, -1.0};
+    std::vector<Spectral> spectral_;
+    std::unique_ptr<WaveFieldTable> table_;
+};
+
+bool WaveOpticsMethod::find_setup(const Scene& scene, std::string& why) const {
+    if (scene.lights.size() != 1 || scene.lights.front().type != LightType::Directional) {
+        why = "needs exactly one directional light (a plane wave)";
+        return false;
+    }
+    if (!(glm::normalize(scene.lights.front().direction).z < -1e-6)) {
+        why = "the directional light must shine downwards onto the water surface";
+        return false;
+    }
+    int water = -1;
+    for (std::size_t i = 0; i < scene.objects.size(); ++i) {
+        const Object& o = scene.objects[i];
+        if (!o.material.is_specular()) continue;
+        if (o.shape == ShapeType::HeightField && o.material.type == MaterialType::Dielectric && water < 0) {
+            water = static_cast<int>(i);
+            continue;
+        }
+        why = "models one height-field water surface; '" + o.name + "' is another specular object";
+        return false;
+    }
+    if (water < 0) {
+        why = "needs a height-field dielectric (water) surface";
+        return false;
+    }
+    if (scene.receiver.object_index == water) {
+        why = "the receiver is the water surface itself";
+        return false;
+    }
+    water_index_ = water;
+    return true;
+}
+
+CausticOutput WaveOpticsMethod::render(const FrameGeometry& frame, const RenderRequest& request) {
+    CausticOutput out;
+    Stopwatch watch;
+    auto lap = [&watch] {
+        const double t = watch.ms();
+        watch.reset();
+        return t;
+    };
+    const HeightField& hf = *frame.objects.at(static_cast<std::size_t>(water_index_)).heightfield;
+    // 1. The surface on the FFT grid, periodic (tapered if its edges do not match), mean level removed.
+    const SurfaceSamples surface = table_->resample(hf, lx_, ly_);
+    if (!surface.periodic) out.health.add("nonperiodic_surface", 1);
+    out.stages_ms.emplace_back("resample", lap());
+
+    // 2. The points to shade: receiver bin centres and covered camera pixels.
+    std::vector<ShadePoint> points;
+    const ReceiverChart* chart = request.receiver;
+    if (chart != nullptr) {
+        points.reserve(static_cast<std::size_t>(chart->width()) * chart->height());
+        for (int j = 0; j < chart->height(); ++j)
+            for (int i = 0; i < chart->width(); ++i) {
+                const double s = (i + 0.5) / chart->width(), t = (j + 0.5) / chart->height();
+                points.push_back({chart->point(s, t), chart->normal(s, t)});
+            }
+    }
+    const std::size_t receiver_points = points.size();
+    const CameraGBuffer* gb = request.camera;
+    std::vector<std::size_t> camera_pixels;
+    if (gb != nullptr) {
+        const int recv = frame.scene->receiver.object_index;
+        for (std::size_t k = 0; k < gb->covered.size(); ++k) {
+            if (!gb->covered[k] || gb->object[k] != recv) continue;
+            camera_pixels.push_back(k);
+            points.push_back({glm::dvec3(gb->position[k]), glm::dvec3(gb->normal[k])});
+        }
+    }
+    // 3. Depth slices spanning the points below the water.
+    double zmin = 1e300, zmax = -1e300;
+    for (const ShadePoint& p : points) {
+        const double z = surface.level - p.position.z;
+        if (z > 0.0) {
+            zmin = std::min(zmin, z);
+            zmax = std::max(zmax, z);
+        }
+    }
+    std::vector<double> depths;
+    if (zmin <= zmax) {
+        if (slices_ == 1) {
+            depths.push_back(0.5 * (zmin + zmax));
+        } else {
+            for (int s = 0; s < slices_; ++s) depths.push_back(zmin + (zmax - zmin) * s / (slices_ - 1));
+        }
+    }
+    out.stages_ms.emplace_back("points", lap());
+
+    // 4. Per wavelength: phase screen, forward transform, one inverse transform per slice.
+    table_->begin(static_cast<int>(depths.size()));
+    double phase_ms = 0.0, propagate_ms = 0.0;
+    std::int64_t violations = 0, aliased = 0;
+    double band_ppm = 0.0, evan_ppm = 0.0, carrier_error = 0.0;
+    if (!depths.empty()) {
+        for (std::size_t m = 0; m < spectral_.size(); ++m) {
+            Spectral& sp = spectral_[m];
+            carrier_error = std::max(carrier_error, sp.carrier_error_rad);
+            aliased += sp.propagator->set_phase_screen(surface.height.data(), static_cast<float>(sp.phase_per_m));
+            phase_ms += lap();
+            for (std::size_t s = 0; s < depths.size(); ++s) {
+                IntensityTarget targets[4];
+                const int count = table_->targets(static_cast<int>(s), static_cast<int>(m), 1.0f / samples_, sp.rgb, targets);
+                const PropagationStats st = sp.propagator->propagate(depths[s], targets, count);
+                if (!st.sampling_ok) ++violations;
+                if (st.total_energy > 0.0) {
+                    band_ppm = std::max(band_ppm, 1e6 * st.band_limited_energy / st.total_energy);
+                    evan_ppm = std::max(evan_ppm, 1e6 * st.evanescent_energy / st.total_energy);
+                }
+            }
+            propagate_ms += lap();
+        }
+    }
+    out.stages_ms.emplace_back("phase_fft", phase_ms);
+    out.stages_ms.emplace_back("propagate", propagate_ms);
+    out.health.add("sampling_violations", violations);
+    out.health.add("phase_aliased_cells", aliased);
+    out.health.add("band_limited_ppm", std::llround(band_ppm));
+    out.health.add("evanescent_ppm", std::llround(evan_ppm));
+    out.health.add("carrier_error_urad", std::llround(carrier_error * 1e6));
+    if (blur_ > 0.0) table_->blur(blur_, lx_, ly_);
+    out.stages_ms.emplace_back("blur", lap());
+
+    // 5. Look the intensity up at every point, scaled to irradiance.
+    LookupGeometry geo;
+    geo.origin = glm::dvec2(hf.origin);
+    geo.lx = lx_;
+    geo.ly = ly_;
+    geo.level = surface.level;
+    geo.depths = depths;
+    geo.walk = spectral_.front().propagator->carrier_walk();
+    geo.refracted = refracted_;
+    geo.taper_band = surface.periodic ? 0.0 : surface.taper_band;
+    geo.irradiance = irradiance_ * cos_i_ * transmittance_;
+    geo.absorption = absorption_;
+    std::vector<glm::vec4> values(points.size());
+    LookupCounters counters;
+    table_->lookup(geo, points, values, counters);
+    out.health.add("not_covered", counters.not_covered);
+    if (!surface.periodic) out.health.add("tapered_lookups", counters.tapered);
+    if (slices_ == 1 && !depths.empty()) {
+        std::int64_t mismatch = 0;
+        for (const ShadePoint& p : points) {
+            const double z = surface.level - p.position.z;
+            if (z > 0.0 && std::abs(z - depths.front()) > 1e-6) ++mismatch;
+        }
+        out.health.add("depth_mismatch", mismatch);
+    }
+    if (chart != nullptr) {
+        out.receiver = Image(chart->width(), chart->height(), 1);
+        if (samples_ > 1) out.receiver_rgb = Image(chart->width(), chart->height(), 3);
+        for (std::size_t k = 0; k < receiver_points; ++k) {
+            out.receiver.pixels[k] = values[k].x;
+            if (samples_ > 1)
+                for (int c = 0; c < 3; ++c) out.receiver_rgb.pixels[3 * k + c] = values[k][c + 1];
+        }
+    }
+    if (gb != nullptr) {
+        out.camera = Image(gb->width, gb->height, 1);
+        for (std::size_t q = 0; q < camera_pixels.size(); ++q)
+            out.camera.pixels[camera_pixels[q]] = values[receiver_points + q].x;
+    }
+    out.stages_ms.emplace_back("lookup", lap());
+    return out;
+}
+
+MethodInfo make_info() {
+    MethodInfo info;
+    info.name = kName;
+    info.doc = kDoc;
+    info.radiometric = true;
+    info.params = param_table();
+    info.create = [](const ParamSet& p) -> std::unique_ptr<Method> { return std::make_unique<WaveOpticsMethod>(p); };
+    return info;
+}
+
+}  // namespace
+
+}  // namespace caustics::wave_optics
+
+CAUSTICS_REGISTER_METHOD(caustics::wave_optics::make_info);

@@ -1,0 +1,359 @@
+// eikonal_fmm (Mercier 2013, Sec. 3): closed-form checks of the eikonal solution and its curvature,
+// the boundary treatment of Algorithm 2, the focus law along the axis of a Gaussian bump, and the hard
+// cases through the plugin interface.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <functional>
+
+#include "../methods/eikonal_fmm/eikonal_solver.hpp"
+#include "errors.hpp"
+#include "frame.hpp"
+#include "registry.hpp"
+#include "volume_grid.hpp"
+
+using namespace caustics;
+
+namespace {
+
+// A height field over [x0, x0 + size]^2 with n x n cells from h(x, y) and its gradient.
+HeightField make_field(double x0, double size, int n, std::function<double(double, double)> h,
+                       std::function<glm::dvec2(double, double)> g) {
+    HeightField hf;
+    hf.nx = hf.ny = n + 1;
+    hf.origin = glm::dvec2(x0);
+    hf.spacing = glm::dvec2(size / n);
+    for (int j = 0; j <= n; ++j)
+        for (int i = 0; i <= n; ++i) {
+            const double x = x0 + i * hf.spacing.x, y = x0 + j * hf.spacing.y;
+            hf.height.push_back(static_cast<float>(h(x, y)));
+            hf.gradient.push_back(glm::vec2(g(x, y)));
+        }
+    hf.exact_gradient = g;
+    return hf;
+}
+
+// A cubic-cell volume with `n` cells across [x0, x0 + size] and depth cells below `top`.
+VolumeShape make_shape(double x0, double size, int n, double top, double depth) {
+    VolumeShape s;
+    s.spacing = size / n;
+    s.nx = s.ny = n;
+    s.nz = static_cast<int>(std::ceil(depth / s.spacing));
+    s.origin = glm::dvec3(x0, x0, top - s.nz * s.spacing);
+    return s;
+}
+
+eikonal::Options options(eikonal::Solver solver, int order, eikonal::Boundary boundary = eikonal::Boundary::Paper) {
+    eikonal::Options o;
+    o.solver = solver;
+    o.order = order;
+    o.boundary = boundary;
+    return o;
+}
+
+struct Variant {
+    eikonal::Solver solver;
+    int order;
+    const char* name;
+};
+const Variant kVariants[] = {{eikonal::Solver::Fmm, 1, "fmm1"},
+                             {eikonal::Solver::Fmm, 2, "fmm2"},
+                             {eikonal::Solver::Sweep, 1, "sweep1"},
+                             {eikonal::Solver::Sweep, 2, "sweep2"}};
+
+// Spherical cap of radius r, apex at z = 0: converging fronts, exact distance r - |p - o|.
+constexpr double kCapRadius = 1.0;
+HeightField cap_field(int n) {
+    const double r = kCapRadius;
+    return make_field(
+        -0.3, 0.6, n, [r](double x, double y) { return std::sqrt(r * r - x * x - y * y) - r; },
+        [r](double x, double y) {
+            const double s = std::sqrt(r * r - x * x - y * y);
+            return glm::dvec2(-x / s, -y / s);
+        });
+}
+double cap_distance(const glm::dvec3& p) { return kCapRadius - glm::length(p - glm::dvec3(0, 0, -kCapRadius)); }
+
+}  // namespace
+
+TEST(EikonalSolver, FlatInterfaceGivesExactDistanceAndZeroCurvature) {
+    const HeightField hf = make_field(-0.5, 1.0, 64, [](double, double) { return 0.0; },
+                                      [](double, double) { return glm::dvec2(0.0); });
+    const VolumeShape shape = make_shape(-0.5, 1.0, 24, 0.1, 0.7);
+    for (const Variant& v : kVariants)
+        for (auto boundary : {eikonal::Boundary::None, eikonal::Boundary::Paper}) {
+            eikonal::Stats stats;
+            const VolumeD phi = eikonal::solve(hf, shape, options(v.solver, v.order, boundary), stats);
+            VolumeF lap;
+            laplacian(phi, lap);
+            double err = 0.0, curv = 0.0;
+            for (int k = 0; k < shape.nz; ++k)
+                for (int j = 0; j < shape.ny; ++j)
+                    for (int i = 0; i < shape.nx; ++i) {
+                        const double z = shape.center(i, j, k).z;
+                        if (z > 0.0) continue;
+                        err = std::max(err, std::fabs(phi.at(i, j, k) + z));
+                        curv = std::max(curv, std::fabs(static_cast<double>(lap.at(i, j, k))));
+                    }
+            EXPECT_LT(err, 1e-12) << v.name;
+            EXPECT_LT(curv, 1e-8) << v.name;
+            EXPECT_EQ(stats.not_converged, 0) << v.name;
+        }
+}
+
+TEST(EikonalSolver, SphericalCapCurvatureIsMinusTwoOverR) {
+    // Near the apex (depth s in [0.05, 0.3]) the Laplacian is -2 / (r - s).
+    const HeightField hf = cap_field(384);
+    const VolumeShape shape = make_shape(-0.3, 0.6, 48, 0.05, 0.45);
+    for (const Variant& v : kVariants) {
+        eikonal::Stats stats;
+        const VolumeD phi = eikonal::solve(hf, shape, options(v.solver, v.order), stats);
+        VolumeF lap;
+        laplacian(phi, lap);
+        double worst = 0.0;
+        for (int k = 0; k < shape.nz; ++k)
+            for (int j = shape.ny / 2 - 2; j <= shape.ny / 2 + 1; ++j)
+                for (int i = shape.nx / 2 - 2; i <= shape.nx / 2 + 1; ++i) {
+                    const glm::dvec3 p = shape.center(i, j, k);
+                    const double s = cap_distance(p);
+                    if (s < 0.05 || s > 0.3) continue;
+                    const double expected = -2.0 / glm::length(p - glm::dvec3(0, 0, -kCapRadius));
+                    worst = std::max(worst, std::fabs(lap.at(i, j, k) - expected) / std::fabs(expected));
+                }
+        std::printf("cap curvature %s: worst relative error %.4f (h = %.4f)\n", v.name, worst, shape.spacing);
+        EXPECT_LT(worst, v.order == 1 ? 0.35 : 0.1) << v.name;
+    }
+}
+
+TEST(EikonalSolver, ConvergenceOrderOnSmoothFront) {
+    // Max error of phi over a central region the domain sides cannot influence, at h and h/2.
+    auto error_at = [](int n, const eikonal::Options& o) {
+        const HeightField hf = cap_field(512);
+        const VolumeShape shape = make_shape(-0.3, 0.6, n, 0.05, 0.4);
+        eikonal::Stats stats;
+        const VolumeD phi = eikonal::solve(hf, shape, o, stats);
+        double err = 0.0;
+        for (int k = 0; k < shape.nz; ++k)
+            for (int j = 0; j < shape.ny; ++j)
+                for (int i = 0; i < shape.nx; ++i) {
+                    const glm::dvec3 p = shape.center(i, j, k);
+                    const double s = cap_distance(p);
+                    if (std::fabs(p.x) > 0.1 || std::fabs(p.y) > 0.1 || s < 0.0 || s > 0.3) continue;
+                    err = std::max(err, std::fabs(phi.at(i, j, k) - s));
+                }
+        return err;
+    };
+    for (const Variant& v : kVariants) {
+        const eikonal::Options o = options(v.solver, v.order, eikonal::Boundary::None);
+        const double e1 = error_at(32, o), e2 = error_at(64, o);
+        const double order = std::log2(e1 / e2);
+        std::printf("convergence %s: err(32) = %.3g err(64) = %.3g order = %.2f\n", v.name, e1, e2, order);
+        if (v.order == 1) {
+            // First-order fast marching converges like h |log h| in the max norm before its asymptote.
+            EXPECT_GT(order, 0.6) << v.name;
+            EXPECT_LT(order, 1.4) << v.name;
+        } else {
+            EXPECT_GT(order, 1.5) << v.name;
+        }
+    }
+}
+
+TEST(EikonalSolver, PaperBoundaryKeepsTiltedPlaneFlat) {
+    // Mercier Fig. 3: a tilted plane touching the domain sides has zero curvature everywhere; without
+    // boundary treatment the cells fed from outside the domain expand as eccentric circles.
+    const double m = 0.4;
+    const HeightField hf = make_field(-0.5, 1.0, 64, [m](double x, double) { return m * x; },
+                                      [m](double, double) { return glm::dvec2(m, 0.0); });
+    const VolumeShape shape = make_shape(-0.5, 1.0, 32, 0.5, 1.3);
+    for (const Variant& v : kVariants) {
+        double edge[2];
+        for (int b = 0; b < 2; ++b) {
+            eikonal::Stats stats;
+            const VolumeD phi = eikonal::solve(
+                hf, shape, options(v.solver, v.order, b == 0 ? eikonal::Boundary::Paper : eikonal::Boundary::None), stats);
+            VolumeF lap;
+            laplacian(phi, lap);
+            // Curvature over the first four columns next to the x = -0.5 face, in the water.
+            double worst = 0.0;
+            for (int k = 0; k < shape.nz; ++k)
+                for (int j = 0; j < shape.ny; ++j)
+                    for (int i = 0; i < 4; ++i) {
+                        const glm::dvec3 p = shape.center(i, j, k);
+                        if (p.z > m * p.x - 2.5 * shape.spacing) continue;
+                        worst = std::max(worst, std::fabs(static_cast<double>(lap.at(i, j, k))));
+                    }
+            edge[b] = worst;
+        }
+        std::printf("tilted plane %s: max |curvature| near the edge: paper %.3g, none %.3g\n", v.name, edge[0], edge[1]);
+        EXPECT_LT(edge[0], 0.05) << v.name;   // uniform (zero) curvature with Algorithm 2
+        EXPECT_GT(edge[1], 1.0) << v.name;    // visibly not without it
+    }
+}
+
+TEST(EikonalSolver, GaussianFocusFollowsTwoOverRMinusS) {
+    // gaussian.json: amplitude 0.04, sigma 0.1 -> apex radius R = sigma^2 / A = 0.25 m. Along the axis the
+    // front is the parallel surface of the bump: Laplacian = -2 / (R - s) at depth s < R.
+    HeightFieldDesc desc;
+    desc.center = glm::dvec2(0.0);
+    desc.size = glm::dvec2(2.0);
+    desc.resolution = glm::ivec2(512);
+    desc.generator = HeightGenerator::Gaussian;
+    desc.amplitude = 0.04;
+    desc.sigma = 0.1;
+    const HeightField hf = generate_heightfield(desc, 0.0, 0, 30.0);
+    const double R = desc.sigma * desc.sigma / desc.amplitude;
+    const int n = 129;  // odd: a column of cell centres on the axis
+    const double h = 1.0 / 128;
+    VolumeShape shape;
+    shape.spacing = h;
+    shape.nx = shape.ny = n;
+    shape.nz = static_cast<int>(std::ceil(0.55 / h));
+    shape.origin = glm::dvec3(-0.5 * n * h, -0.5 * n * h, 0.05 - shape.nz * h);
+    for (const Variant& v : kVariants) {
+        eikonal::Stats stats;
+        const VolumeD phi = eikonal::solve(hf, shape, options(v.solver, v.order), stats);
+        VolumeF lap;
+        laplacian(phi, lap);
+        const int c = n / 2;
+        // Relative error (first order: divided by h / (R - s), its expected size), and the depth where
+        // the response becomes singular on the grid: |Laplacian| >= 1 / (2h), the value of a front whose
+        // radius of curvature is four cells (2 / (R - s) at R - s = 4h).
+        double worst = 0.0, onset = -1.0;
+        for (int k = shape.nz - 1; k >= 0; --k) {
+            const double s = desc.amplitude - shape.center(c, c, k).z;  // depth below the apex
+            const double value = lap.at(c, c, k);
+            if (s > 0.02 && s <= 0.8 * R) {
+                const double rel = std::fabs(value + 2.0 / (R - s)) * (R - s) / 2.0;
+                // First order: relative to h / (R - s); second order: plain relative error.
+                worst = std::max(worst, v.order == 1 ? rel / (h / (R - s)) : rel);
+            }
+            if (onset < 0.0 && -value * h >= 0.5) onset = s;
+        }
+        std::printf("gaussian focus %s: worst relative error%s = %.3f (s <= 0.8R); singular onset at "
+                    "s = %.4f, R = %.4f, (s - R) / h = %.2f\n", v.name, v.order == 1 ? " / (h/(R-s))" : "", worst, onset, R, (onset - R) / h);
+        EXPECT_LT(worst, v.order == 1 ? 10.0 : 0.1) << v.name;
+        EXPECT_GT(onset, 0.0) << v.name;
+        // Second order: within two cells of R; first order smooths the focus a little more (three).
+        EXPECT_LE(std::fabs(onset - R), (v.order == 2 ? 2.0 : 3.0) * h) << v.name;
+    }
+}
+
+// ---- Through the plugin interface ----
+
+namespace {
+
+Scene water_scene(HeightFieldDesc water, double floor_z, double floor_size) {
+    Scene scene;
+    scene.name = "test";
+    scene.path = "test.json";
+    scene.lights.push_back(Light{});
+    Object w;
+    w.name = "water";
+    w.shape = ShapeType::HeightField;
+    w.material.type = MaterialType::Dielectric;
+    w.material.ior = 1.33;
+    w.heightfield = water;
+    scene.objects.push_back(w);
+    Object floor;
+    floor.name = "floor";
+    floor.shape = ShapeType::Plane;
+    floor.center = glm::dvec3(0, 0, floor_z);
+    floor.u = glm::dvec3(floor_size, 0, 0);
+    floor.v = glm::dvec3(0, floor_size, 0);
+    scene.objects.push_back(floor);
+    scene.receiver.object = "floor";
+    scene.receiver.object_index = 1;
+    scene.receiver.width = scene.receiver.height = 32;
+    return scene;
+}
+
+HeightFieldDesc sine_desc(double amplitude, double wavelength, int resolution = 256) {
+    HeightFieldDesc d;
+    d.size = glm::dvec2(2.0);
+    d.resolution = glm::ivec2(resolution);
+    d.generator = HeightGenerator::Sine;
+    d.amplitude = amplitude;
+    d.wavelength = wavelength;
+    return d;
+}
+
+// Renders receiver map and a small camera view; asserts finite output.
+void render_ok(const Scene& scene, std::map<std::string, std::string> params, const std::string& what) {
+    const MethodInfo& info = require_method("eikonal_fmm");
+    auto method = info.create(ParamSet::resolve(info.name, info.params, params));
+    ASSERT_TRUE(method->capabilities(scene).supported) << what;
+    const FrameGeometry frame = build_frame_geometry(scene, 0);
+    method->prepare(scene);
+    method->update(frame);
+    ReceiverChart chart(frame, scene.receiver.width, scene.receiver.height);
+    CameraGBuffer gb;
+    gb.width = 8;
+    gb.height = 2;
+    gb.covered.assign(16, 1);
+    gb.object.assign(16, 1);
+    gb.normal.assign(16, glm::vec3(0, 0, 1));
+    for (int k = 0; k < 16; ++k) gb.position.push_back(glm::vec3(-0.6f + 0.08f * k, 0.1f, static_cast<float>(scene.objects[1].center.z)));
+    RenderRequest request{&chart, &gb};
+    CausticOutput out = method->render(frame, request);
+    ASSERT_EQ(out.receiver.width, scene.receiver.width) << what;
+    double sum = 0.0;
+    for (float v : out.receiver.pixels) {
+        ASSERT_TRUE(std::isfinite(v)) << what;
+        ASSERT_GE(v, 0.0f) << what;
+        sum += v;
+    }
+    for (float v : out.camera.pixels) ASSERT_TRUE(std::isfinite(v)) << what;
+    EXPECT_EQ(out.health.get("nonfinite"), 0) << what;
+    if (params.count("normalize") == 0 && sum > 0.0)  // flux: mean = transmitted irradiance (E0 = 1)
+        EXPECT_NEAR(sum / out.receiver.pixels.size(), 1.0, 1e-3) << what;
+}
+
+}  // namespace
+
+TEST(EikonalMethod, RegisteredWithTableAndCapabilities) {
+    const MethodInfo* info = find_method("eikonal_fmm");
+    ASSERT_NE(info, nullptr);
+    EXPECT_FALSE(info->radiometric);
+    bool grid = false, iterations = false;
+    for (const ParamSpec& p : info->params) {
+        grid |= p.name == "grid";
+        iterations |= p.name == "iterations";
+        EXPECT_FALSE(p.doc.empty()) << p.name;
+    }
+    EXPECT_TRUE(grid && iterations);
+    Scene scene = water_scene(sine_desc(0.01, 0.25), -0.4, 1.0);
+    EXPECT_TRUE(info->create(ParamSet::resolve(info->name, info->params, {}))->capabilities(scene).supported);
+    scene.lights[0].type = LightType::Point;
+    EXPECT_FALSE(info->create(ParamSet::resolve(info->name, info->params, {}))->capabilities(scene).supported);
+    scene.lights[0].type = LightType::Directional;
+    scene.objects[0].material.type = MaterialType::Mirror;
+    const Capability c = info->create(ParamSet::resolve(info->name, info->params, {}))->capabilities(scene);
+    EXPECT_FALSE(c.supported);
+    EXPECT_NE(c.reason.find("height-field"), std::string::npos);
+}
+
+TEST(EikonalMethod, EveryOptionRendersFinite) {
+    const Scene scene = water_scene(sine_desc(0.01, 0.25), -0.4, 1.0);
+    for (const char* solver : {"fmm", "sweep"})
+        for (const char* boundary : {"none", "embed", "paper"})
+            for (const char* init : {"vertex", "triangle"})
+                render_ok(scene, {{"grid", "24"}, {"solver", solver}, {"boundary", boundary}, {"init", init}},
+                          std::string(solver) + "/" + boundary + "/" + init);
+    render_ok(scene, {{"grid", "32"}, {"iterations", "3"}, {"threshold_height", "0.1"}, {"b", "2"}}, "dissipation");
+    render_ok(scene, {{"grid", "32"}, {"ior_model", "scaled"}}, "scaled");
+    render_ok(scene, {{"grid", "32"}, {"normalize", "raw"}, {"order", "1"}}, "raw");
+}
+
+TEST(EikonalMethod, HardCasesStayFinite) {
+    // Interface touching the domain side: the floor is as large as the water.
+    render_ok(water_scene(sine_desc(0.01, 0.25), -0.4, 2.0), {{"grid", "32"}}, "touching side");
+    // Slopes steeper than 1: amplitude * 2 pi / wavelength = 2.5.
+    for (const char* solver : {"fmm", "sweep"})
+        render_ok(water_scene(sine_desc(0.05, 0.125, 512), -0.4, 1.0), {{"grid", "32"}, {"solver", solver}}, "steep");
+    // Floor far below the first focus (0.64 m): 5 m deep.
+    render_ok(water_scene(sine_desc(0.01, 0.25), -5.0, 1.0), {{"grid", "16"}}, "deep");
+    // A 4^3 grid.
+    for (const char* solver : {"fmm", "sweep"})
+        render_ok(water_scene(sine_desc(0.01, 0.25), -0.4, 1.0), {{"grid", "4"}, {"solver", solver}}, "grid 4");
+}

@@ -1,0 +1,223 @@
+// Sweep specs, the run plan, and the sweep runner's bookkeeping (resume after SIGKILL, skipped and
+// failed runs). The runner tests drive the real `caustics` program.
+#include <gtest/gtest.h>
+
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include "errors.hpp"
+#include "sweep.hpp"
+#include "sweep_spec.hpp"
+
+using namespace caustics;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path temp_dir(const std::string& name) {
+    fs::path d = fs::temp_directory_path() / ("caustics_test_sweep_" + name + "_" + std::to_string(getpid()));
+    fs::remove_all(d);
+    fs::create_directories(d);
+    return d;
+}
+
+fs::path write_file(const fs::path& path, const std::string& text) {
+    std::ofstream(path) << text;
+    return path;
+}
+
+std::string read_file(const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::stringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+
+std::vector<std::string> lines_of(const std::string& text) {
+    std::vector<std::string> lines;
+    std::stringstream s(text);
+    for (std::string line; std::getline(s, line);) lines.push_back(line);
+    return lines;
+}
+
+std::string shell_quote(const std::string& s) { return "'" + s + "'"; }
+
+int run_program(const std::string& args, const fs::path& log) {
+    const std::string command = std::string(CAUSTICS_BINARY) + " " + args + " >" + shell_quote(log.string()) + " 2>&1";
+    const int status = std::system(command.c_str());
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+const char* kValidSpec = R"({
+  "scenes": ["sine"],
+  "frames": [0],
+  "reference": {"photons": 20000},
+  "timing": {"warmup": 0, "repeats": 1},
+  "methods": {"caustic_triangles": {"grid": {"pow2": [16, 64]}, "iterations": [1]}}
+})";
+
+}  // namespace
+
+TEST(SweepSpec, ValidSpecExpandsToCartesianProduct) {
+    const fs::path d = temp_dir("valid");
+    const SweepSpec spec = load_sweep_spec(write_file(d / "s.json", kValidSpec).string(),
+                                           {"caustic_triangles.absorption=[true,false]"});
+    ASSERT_EQ(spec.methods.size(), 1u);
+    const auto runs = plan_runs(spec);
+    ASSERT_EQ(runs.size(), 3u * 1u * 2u);
+    // Axes sorted by name (absorption, grid, iterations), the last varying fastest; ids unique.
+    EXPECT_EQ(runs[0].params.at("absorption"), "true");
+    EXPECT_EQ(runs[0].params.at("grid"), "16");
+    EXPECT_EQ(runs[1].params.at("grid"), "32");
+    EXPECT_EQ(runs[3].params.at("absorption"), "false");
+    EXPECT_EQ(runs[3].params.at("grid"), "16");
+    std::set<std::string> ids;
+    for (const auto& r : runs) ids.insert(r.id);
+    EXPECT_EQ(ids.size(), runs.size());
+    EXPECT_EQ(spec.photons, 20000u);
+}
+
+TEST(SweepSpec, RangeAndPow2) {
+    auto r = expand_axis_values(nlohmann::json::parse(R"({"range": [1, 9, 4]})"), "f", "k");
+    ASSERT_EQ(r.size(), 3u);
+    EXPECT_EQ(r[2].get<int>(), 9);
+    auto f = expand_axis_values(nlohmann::json::parse(R"({"range": [0.5, 1.0, 0.25]})"), "f", "k");
+    ASSERT_EQ(f.size(), 3u);
+    EXPECT_DOUBLE_EQ(f[2].get<double>(), 1.0);
+    auto p = expand_axis_values(nlohmann::json::parse(R"({"pow2": [32, 256]})"), "f", "k");
+    ASSERT_EQ(p.size(), 4u);
+    EXPECT_EQ(p[3].get<int>(), 256);
+}
+
+// Each malformed spec: InputError whose message names the offending key.
+TEST(SweepSpec, MalformedCatalog) {
+    const fs::path d = temp_dir("malformed");
+    const std::string m = R"("methods": {"caustic_triangles": {"grid": [32]}})";
+    const std::vector<std::tuple<std::string, std::string, std::string>> cases = {
+        {"unknown_method", R"({"scenes": ["sine"], "methods": {"no_such_method": {}}})", "no_such_method"},
+        {"unknown_axis", R"({"scenes": ["sine"], "methods": {"caustic_triangles": {"gird": [1]}}})", "gird"},
+        {"empty_axis", R"({"scenes": ["sine"], "methods": {"caustic_triangles": {"grid": []}}})", "grid"},
+        {"bad_range", R"({"scenes": ["sine"], "methods": {"caustic_triangles": {"grid": {"range": [64, 16, 8]}}}})", "grid.range"},
+        {"bad_pow2", R"({"scenes": ["sine"], "methods": {"caustic_triangles": {"grid": {"pow2": [30, 64]}}}})", "grid.pow2"},
+        {"non_numeric_int", R"({"scenes": ["sine"], "methods": {"caustic_triangles": {"grid": ["big"]}}})", "grid"},
+        {"fractional_int", R"({"scenes": ["sine"], "methods": {"caustic_triangles": {"grid": [32.5]}}})", "grid"},
+        {"unknown_scene", R"({"scenes": ["atlantis"], )" + m + "}", "scenes[0]"},
+        {"duplicate_axis", R"({"scenes": ["sine"], "methods": {"caustic_triangles": {"grid": [32], "grid": [64]}}})", "grid"},
+        {"negative_repeats", R"({"scenes": ["sine"], "timing": {"repeats": -3}, )" + m + "}", "timing.repeats"},
+        {"unknown_top_key", R"({"scenes": ["sine"], "sceens": [], )" + m + "}", "sceens"},
+        {"no_methods", R"({"scenes": ["sine"], "methods": {}})", "methods"},
+        {"bad_json", R"({"scenes": ["sine"], )", "JSON"},
+    };
+    for (const auto& [name, text, key] : cases) {
+        const fs::path file = write_file(d / (name + ".json"), text);
+        try {
+            load_sweep_spec(file.string());
+            ADD_FAILURE() << name << ": accepted";
+        } catch (const InputError& e) {
+            const std::string msg = e.what();
+            EXPECT_NE(msg.find(key), std::string::npos) << name << ": " << msg;
+            EXPECT_NE(msg.find(file.string()), std::string::npos) << name << ": " << msg;
+        }
+    }
+    EXPECT_THROW(load_sweep_spec((d / "missing.json").string()), InputError);
+    EXPECT_THROW(load_sweep_spec(write_file(d / "ok.json", kValidSpec).string(), {"caustic_triangles.grid"}), InputError);
+}
+
+TEST(SweepCli, MalformedSpecExitsTwoAndWritesNothing) {
+    const fs::path d = temp_dir("cli_bad");
+    const fs::path spec = write_file(d / "bad.json", R"({"scenes": ["sine"], "methods": {"caustic_triangles": {"grid": ["x"]}}})");
+    EXPECT_EQ(run_program("sweep " + shell_quote(spec.string()) + " --out " + shell_quote((d / "out").string()), d / "log"), 2);
+    EXPECT_FALSE(fs::exists(d / "out"));
+    EXPECT_NE(read_file(d / "log").find("methods.caustic_triangles.grid"), std::string::npos);
+}
+
+TEST(SweepCli, TooManyRunsNeedYes) {
+    const fs::path d = temp_dir("cli_many");
+    const fs::path spec = write_file(d / "big.json", R"({"scenes": ["sine"], "methods": {"caustic_triangles": {"grid": {"range": [2, 1000, 1]}}}})");
+    EXPECT_EQ(run_program("sweep " + shell_quote(spec.string()) + " --out " + shell_quote((d / "out").string()), d / "log"), 2);
+    EXPECT_NE(read_file(d / "log").find("--yes"), std::string::npos);
+}
+
+// A sweep killed with SIGKILL in the middle of a run resumes: every run exactly once, finished rows
+// byte-identical.
+TEST(SweepCli, ResumeAfterKillKeepsFinishedRowsAndRunsEachOnce) {
+    const fs::path d = temp_dir("resume");
+    const fs::path spec = write_file(d / "s.json", R"({
+      "scenes": ["sine"], "reference": {"photons": 20000}, "timing": {"warmup": 0, "repeats": 2},
+      "methods": {"caustic_triangles": {"grid": [16, 24, 32, 40, 48, 56]}}})");
+    const fs::path out = d / "out";
+    const std::string args = "sweep " + shell_quote(spec.string()) + " --out " + shell_quote(out.string()) +
+                             " --cache " + shell_quote((d / "cache").string());
+    const pid_t pid = fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+        const std::string command = std::string("exec ") + CAUSTICS_BINARY + " " + args + " >/dev/null 2>&1";
+        execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+        _exit(127);
+    }
+    // Wait for two finished runs and the third one under way, then kill without warning.
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(240);
+    while (std::chrono::steady_clock::now() < deadline) {
+        if (lines_of(read_file(out / "results.jsonl")).size() >= 2) break;
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    kill(pid, SIGKILL);
+    int status = 0;
+    waitpid(pid, &status, 0);
+    const std::vector<std::string> before = lines_of(read_file(out / "results.jsonl"));
+    ASSERT_GE(before.size(), 2u) << "the sweep did not get far enough to be interrupted";
+    ASSERT_LT(before.size(), 6u) << "the sweep finished before it was killed";
+
+    EXPECT_EQ(run_program(args, d / "log_fresh"), 2) << "an existing sweep without --resume must be refused";
+    ASSERT_EQ(run_program(args + " --resume", d / "log_resume"), 0) << read_file(d / "log_resume");
+    const std::vector<std::string> after = lines_of(read_file(out / "results.jsonl"));
+    ASSERT_EQ(after.size(), 6u);
+    for (std::size_t i = 0; i < before.size(); ++i) EXPECT_EQ(after[i], before[i]) << "row " << i << " changed";
+    std::map<std::string, int> seen;
+    for (const auto& line : after) ++seen[nlohmann::json::parse(line)["run_id"].get<std::string>()];
+    EXPECT_EQ(seen.size(), 6u);
+    for (const auto& [id, n] : seen) EXPECT_EQ(n, 1) << id;
+    // The CSV has a header and one row per run, and each run folder has its metrics.
+    EXPECT_EQ(lines_of(read_file(out / "results.csv")).size(), 7u);
+    for (const auto& [id, n] : seen) EXPECT_TRUE(fs::exists(out / "runs" / id / "metrics.json")) << id;
+    EXPECT_TRUE(fs::exists(out / "manifest.json"));
+}
+
+// An out-of-range axis value is a skipped run (with the parameter's valid range), a run past its time
+// limit a failed one; the sweep still exits 0.
+TEST(SweepCli, SkippedAndFailedRunsAreRecorded) {
+    const fs::path d = temp_dir("skipfail");
+    const std::string common = R"("scenes": ["sine"], "reference": {"photons": 20000},)";
+    const fs::path skip_spec = write_file(d / "skip.json", "{" + common + R"( "timing": {"warmup": 0, "repeats": 1},
+      "methods": {"caustic_triangles": {"grid": [1, 16]}}})");
+    const std::string cache = " --cache " + shell_quote((d / "cache").string());
+    ASSERT_EQ(run_program("sweep " + shell_quote(skip_spec.string()) + " --out " + shell_quote((d / "a").string()) + cache, d / "log_a"), 0)
+        << read_file(d / "log_a");
+    auto rows = lines_of(read_file(d / "a" / "results.jsonl"));
+    ASSERT_EQ(rows.size(), 2u);
+    auto skipped = nlohmann::json::parse(rows[0]);
+    EXPECT_EQ(skipped["status"], "skipped");
+    EXPECT_NE(skipped["message"].get<std::string>().find("grid"), std::string::npos) << skipped.dump();
+    EXPECT_EQ(nlohmann::json::parse(rows[1])["status"], "ok");
+
+    const fs::path fail_spec = write_file(d / "fail.json", "{" + common + R"( "timing": {"warmup": 0, "repeats": 1, "timeout_s": 0.05},
+      "methods": {"caustic_triangles": {"grid": [16]}}})");
+    ASSERT_EQ(run_program("sweep " + shell_quote(fail_spec.string()) + " --out " + shell_quote((d / "b").string()) + cache, d / "log_b"), 0)
+        << read_file(d / "log_b");
+    rows = lines_of(read_file(d / "b" / "results.jsonl"));
+    ASSERT_EQ(rows.size(), 1u);
+    auto failed = nlohmann::json::parse(rows[0]);
+    EXPECT_EQ(failed["status"], "failed");
+    EXPECT_NE(failed["message"].get<std::string>().find("timed out"), std::string::npos);
+    EXPECT_NE(read_file(d / "b" / "results.csv").find("failed"), std::string::npos);
+}
