@@ -8,7 +8,7 @@
 // arithmetic with no contraction into fused multiply-adds, no C library calls (the drops' profile uses
 // our own exp), and our own splitmix64 for the seeds.
 //
-// The animation length comes in `desc.period` (load_scene sets it to frames / fps for this generator).
+// The animation length comes in `desc.animation_length` (load_scene sets it to frames / fps).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -60,7 +60,7 @@ struct Drop {
 
 std::vector<Drop> seeded_drops(const HeightFieldDesc& d, double fps) {
     std::uint64_t state = d.seed;
-    const int half = std::max(1, static_cast<int>(std::floor(0.5 * d.period * fps)));
+    const int half = std::max(1, static_cast<int>(std::floor(0.5 * d.animation_length * fps)));
     // Scalar arithmetic (not glm's templates, compiled outside the pragma above).
     const double lo_x = d.center.x - 0.5 * d.size.x, lo_y = d.center.y - 0.5 * d.size.y;
     std::vector<Drop> drops(static_cast<std::size_t>(std::max(0, d.drops)));
@@ -171,7 +171,7 @@ private:
 bool same_simulation(const HeightFieldDesc& a, const HeightFieldDesc& b) {
     return a.center == b.center && a.size == b.size && a.resolution == b.resolution && a.amplitude == b.amplitude &&
            a.drops == b.drops && a.drop_radius == b.drop_radius && a.wave_speed == b.wave_speed &&
-           a.damping == b.damping && a.seed == b.seed && a.period == b.period;
+           a.damping == b.damping && a.seed == b.seed && a.animation_length == b.animation_length;
 }
 
 }  // namespace

@@ -1,20 +1,21 @@
 #include "params.hpp"
 
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdlib>
-#include <sstream>
 
 #include "errors.hpp"
 
 namespace caustics {
 namespace {
 
+// Shortest text that reads back to the same double ("0.1", "1e-12"), so tables and result rows show
+// what the user typed.
 std::string format_number(double v) {
-    std::ostringstream s;
-    s.precision(17);
-    s << v;
-    return s.str();
+    char buffer[64];
+    const auto result = std::to_chars(buffer, buffer + sizeof buffer, v);
+    return std::string(buffer, result.ptr);
 }
 
 bool parse_double(const std::string& text, double& out) {

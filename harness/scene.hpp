@@ -65,6 +65,7 @@ struct HeightFieldDesc {
     double drop_radius = 0.05;
     double wave_speed = 0.5;        // [m/s]
     double damping = 0.2;           // [1/s]
+    double animation_length = 2.0;  // [s] the scene's animation (frames / fps); drops fall in its first half
     // image: height map file; pixel values (first channel, [0, 1]) times amplitude
     std::string image_path;
 };

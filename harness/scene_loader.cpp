@@ -1,9 +1,10 @@
 // load_scene: the JSON scene format of DESIGN.md section 8 (the format is fixed in
-// .briefs/scenes_spec.md). Every field is validated; any problem is an InputError naming the file, the
+// scenes/README.md). Every field is validated; any problem is an InputError naming the file, the
 // key path ("objects[2].material.ior") and what would be valid.
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <set>
 #include <sstream>
 
@@ -271,6 +272,48 @@ Medium parse_medium(const JsonNode& n) {
     return m;
 }
 
+// A parser callback that rejects a key repeated inside one JSON object (nlohmann would silently keep
+// one of them), naming its key path.
+nlohmann::json::parser_callback_t duplicate_key_check(const std::string& path) {
+    struct Level {
+        bool object = false;
+        std::set<std::string> keys;
+        std::string key;
+        std::size_t index = 0;
+    };
+    auto stack = std::make_shared<std::vector<Level>>();
+    return [stack, path](int, nlohmann::json::parse_event_t event, nlohmann::json& parsed) {
+        using E = nlohmann::json::parse_event_t;
+        auto element_done = [&] {
+            if (!stack->empty() && !stack->back().object) ++stack->back().index;
+        };
+        switch (event) {
+        case E::object_start: stack->push_back({true, {}, {}, 0}); break;
+        case E::array_start: stack->push_back({false, {}, {}, 0}); break;
+        case E::object_end:
+        case E::array_end:
+            if (!stack->empty()) stack->pop_back();
+            element_done();
+            break;
+        case E::value: element_done(); break;
+        case E::key: {
+            Level& top = stack->back();
+            top.key = parsed.get<std::string>();
+            if (!top.keys.insert(top.key).second) {
+                std::string key_path;
+                for (const Level& l : *stack) {
+                    if (l.object) key_path += (key_path.empty() ? "" : ".") + l.key;
+                    else key_path += "[" + std::to_string(l.index) + "]";
+                }
+                throw InputError(path, key_path, "duplicate key: each key may appear once in an object");
+            }
+            break;
+        }
+        }
+        return true;
+    };
+}
+
 std::string read_file(const std::string& path) {
     std::error_code ec;
     if (!fs::exists(path, ec)) throw InputError(path, "", "the scene file does not exist");
@@ -293,7 +336,7 @@ Scene load_scene(const std::string& path) {
 
     nlohmann::json root;
     try {
-        root = nlohmann::json::parse(scene.source_text);
+        root = nlohmann::json::parse(scene.source_text, duplicate_key_check(path));
     } catch (const nlohmann::json::exception& e) {
         // parse_error carries "at line L, column C"; out_of_range 406 is a number literal that overflows.
         throw InputError(path, "", std::string("not valid JSON: ") + e.what());
@@ -355,11 +398,10 @@ Scene load_scene(const std::string& path) {
         scene.receiver.height = res.y;
     }
 
-    // The waves generator drops its seeded drops in the first half of the animation; HeightFieldDesc
-    // carries the animation length in `period` for it (the noise generator's own period is a JSON key).
+    // The waves generator drops its seeded drops in the first half of the animation.
     for (Object& o : scene.objects)
-        if (o.shape == ShapeType::HeightField && o.heightfield.generator == HeightGenerator::Waves)
-            o.heightfield.period = scene.animation.frames / scene.animation.fps;
+        if (o.shape == ShapeType::HeightField)
+            o.heightfield.animation_length = scene.animation.frames / scene.animation.fps;
     return scene;
 }
 

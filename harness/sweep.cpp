@@ -234,7 +234,7 @@ SweepSummary run_sweep(const SweepOptions& options) {
     if (!options.resume && fs::exists(jsonl, ec))
         throw InputError("--out", options.out_dir, "already holds a sweep; pass --resume to continue it or choose another folder");
     // Every scene must load before anything runs: a malformed scene is bad input of the whole sweep.
-    for (const auto& path : spec.scenes) (void)load_scene(path);
+    for (const auto& scene : spec.scenes) (void)load_scene(scene.path);
 
     fs::create_directories(dir / "runs");
     json manifest = run_context();

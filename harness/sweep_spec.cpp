@@ -14,6 +14,8 @@ namespace caustics {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
+std::vector<json> expand_axis_values(const json& value, const std::string& file, const std::string& key);
+
 namespace {
 
 // nlohmann keeps the last of duplicate keys silently; a duplicated axis is almost always a mistake in
@@ -106,6 +108,13 @@ std::string safe_token(const std::string& s) {
     return out;
 }
 
+std::vector<int> parse_frames(const json& value, const std::string& file, const std::string& key) {
+    std::vector<int> frames;
+    for (const json& f : expand_axis_values(value, file, key))
+        frames.push_back(static_cast<int>(require_integer(f, file, key, 0, 1000000)));
+    return frames;
+}
+
 }  // namespace
 
 std::vector<json> expand_axis_values(const json& value, const std::string& file, const std::string& key) {
@@ -179,17 +188,25 @@ SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string
         if (!root["description"].is_string()) throw InputError(path, "description", "must be a string");
         spec.description = root["description"].get<std::string>();
     }
+    std::vector<int> default_frames{0};
+    if (root.contains("frames")) default_frames = parse_frames(root["frames"], path, "frames");
     if (!root.contains("scenes") || !root["scenes"].is_array() || root["scenes"].empty())
         throw InputError(path, "scenes", "must be a non-empty list of scene names or paths");
     for (std::size_t i = 0; i < root["scenes"].size(); ++i) {
         const std::string key = "scenes[" + std::to_string(i) + "]";
-        if (!root["scenes"][i].is_string()) throw InputError(path, key, "must be a scene name or path");
-        spec.scenes.push_back(resolve_scene(root["scenes"][i].get<std::string>(), path, key));
-    }
-    if (root.contains("frames")) {
-        spec.frames.clear();
-        for (const json& f : expand_axis_values(root["frames"], path, "frames"))
-            spec.frames.push_back(static_cast<int>(require_integer(f, path, "frames", 0, 1000000)));
+        const json& entry = root["scenes"][i];
+        SweepScene scene;
+        if (entry.is_string()) {
+            scene.path = resolve_scene(entry.get<std::string>(), path, key);
+            scene.frames = default_frames;
+        } else if (entry.is_object() && entry.contains("scene") && entry["scene"].is_string()) {
+            check_keys(entry, {"scene", "frames"}, path, key);
+            scene.path = resolve_scene(entry["scene"].get<std::string>(), path, key + ".scene");
+            scene.frames = entry.contains("frames") ? parse_frames(entry["frames"], path, key + ".frames") : default_frames;
+        } else {
+            throw InputError(path, key, "must be a scene name or path, or {\"scene\": NAME, \"frames\": [...]}");
+        }
+        spec.scenes.push_back(std::move(scene));
     }
     if (root.contains("reference")) {
         const json& r = root["reference"];
@@ -240,9 +257,10 @@ SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string
 
 std::vector<PlannedRun> plan_runs(const SweepSpec& spec) {
     std::vector<PlannedRun> runs;
-    for (const auto& scene_path : spec.scenes) {
+    for (const auto& scene : spec.scenes) {
+        const std::string& scene_path = scene.path;
         const std::string scene_name = fs::path(scene_path).stem().string();
-        for (int frame : spec.frames) {
+        for (int frame : scene.frames) {
             for (const auto& m : spec.methods) {
                 // Odometer over the axes, last axis fastest.
                 std::vector<std::size_t> index(m.axes.size(), 0);

@@ -4,8 +4,9 @@
 //
 // {
 //   "description": "free text",
-//   "scenes": ["pool", "scenes/sine.json"],      // a name in scenes/ or a path
-//   "frames": [0, 10] | {"range": [0, 30, 10]},
+//   "scenes": ["sine", {"scene": "pool", "frames": [30, 60]}],   // a name in scenes/ or a path,
+//                                                 // optionally with its own frames
+//   "frames": [0, 10] | {"range": [0, 30, 10]},  // frames of scenes that name none (default [0])
 //   "reference": {"photons": 2000000, "seed": 1},
 //   "timing": {"warmup": 2, "repeats": 5, "timeout_s": 600},
 //   "report": {...},                             // settings for `caustics report` (scripts/report)
@@ -39,11 +40,15 @@ struct SweepMethod {
     std::vector<SweepAxis> axes;       // sorted by name (JSON objects are unordered)
 };
 
+struct SweepScene {
+    std::string path;                  // resolved scene file path
+    std::vector<int> frames;
+};
+
 struct SweepSpec {
     std::string path;
     std::string description;
-    std::vector<std::string> scenes;   // resolved scene file paths
-    std::vector<int> frames{0};
+    std::vector<SweepScene> scenes;
     std::uint64_t photons = 2'000'000;
     std::uint64_t seed = 1;
     int warmup = 2;

@@ -1,49 +1,26 @@
 #!/usr/bin/env bash
-# Builds the Release configuration and runs the project's main job: until the sweep runner lands, it
-# renders every built-in scene with every registered method (methods that do not support a scene record
-# status "skipped" with the reason) and writes everything under results/:
-#   results/render/<scene>/<method>/{receiver.exr,camera.exr,beauty.png,metrics.json}
-#   results/cache/      the reference cache (reused by later runs)
-# Environment: PHOTONS (reference photons, default 4000000), REPEATS (default 10), WARMUP (default 3),
-# THREADS (default: all cores), POOL_FRAME (default 60).
+# The project's main job: builds the Release configuration, runs the quick sweep (every method on the
+# sine, pool and sphere scenes with small axes; methods that do not support a scene are recorded as
+# skipped with their reason) and writes its report. The last line printed is the path of report.md.
+#
+#   results/sweeps/quick-<date>/  results.csv, results.jsonl, manifest.json, references/, runs/<id>/,
+#                                 report.md, figures/*.png|pdf, tables/*.tex|md
+#   results/cache/                the reference cache (reused by later runs)
+#
+# Usage: scripts/run.sh [SPEC] [extra `caustics sweep` options, e.g. --axis caustic_triangles.grid=[64]]
+# Environment: THREADS (worker threads per run, default all cores), OUT (output folder).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
 jobs=$(nproc 2>/dev/null || echo 2)
 cmake --preset release -G Ninja >/dev/null
-cmake --build --preset release -j "$jobs"
+cmake --build --preset release -j "$jobs" --target caustics
 
-bin=build/release/harness/cli/caustics
-photons=${PHOTONS:-4000000}
-repeats=${REPEATS:-10}
-warmup=${WARMUP:-3}
-threads=${THREADS:-0}
-pool_frame=${POOL_FRAME:-60}
+spec=${1:-scripts/sweeps/quick.json}
+[ $# -gt 0 ] && shift
+out=${OUT:-results/sweeps/$(basename "$spec" .json)-$(date +%Y%m%d-%H%M%S)}
 export CAUSTICS_CACHE_DIR="${CAUSTICS_CACHE_DIR:-$PWD/results/cache}"
+bin=build/release/harness/cli/caustics
 
-methods=$("$bin" list --json | python3 -c 'import json,sys; print(" ".join(m["name"] for m in json.load(sys.stdin)["methods"]))')
-summary=results/render/summary.txt
-mkdir -p results/render
-: >"$summary.tmp"
-failed=0
-for scene_file in scenes/*.json; do
-  scene=$(basename "$scene_file" .json)
-  frame=0
-  [ "$scene" = pool ] && frame=$pool_frame
-  for method in $methods; do
-    out=results/render/$scene/$method
-    echo "== $scene (frame $frame) x $method -> $out" >&2
-    if "$bin" render "$scene_file" --method "$method" --frame "$frame" --out "$out" --photons "$photons" \
-         --repeats "$repeats" --warmup "$warmup" --threads "$threads" | tee -a "$summary.tmp"; then
-      :
-    else
-      echo "FAILED: $scene x $method (exit $?)" | tee -a "$summary.tmp" >&2
-      failed=$((failed + 1))
-    fi
-  done
-done
-mv "$summary.tmp" "$summary"
-echo
-echo "run.sh: wrote results/render/<scene>/<method>/ (receiver.exr, camera.exr, beauty.png, metrics.json)"
-echo "run.sh: one line per run in $summary; reference cache in $CAUSTICS_CACHE_DIR"
-[ "$failed" -eq 0 ] || { echo "run.sh: $failed run(s) failed" >&2; exit 1; }
+"$bin" sweep "$spec" --out "$out" --threads "${THREADS:-0}" "$@" >&2
+"$bin" report "$out"

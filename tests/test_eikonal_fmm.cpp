@@ -305,8 +305,9 @@ void render_ok(const Scene& scene, std::map<std::string, std::string> params, co
     }
     for (float v : out.camera.pixels) ASSERT_TRUE(std::isfinite(v)) << what;
     EXPECT_EQ(out.health.get("nonfinite"), 0) << what;
-    if (params.count("normalize") == 0 && sum > 0.0)  // flux: mean = transmitted irradiance (E0 = 1)
+    if (params.count("normalize") == 0 && sum > 0.0) {  // flux: mean = transmitted irradiance (E0 = 1)
         EXPECT_NEAR(sum / out.receiver.pixels.size(), 1.0, 1e-3) << what;
+    }
 }
 
 }  // namespace

@@ -49,7 +49,9 @@ TEST(BuiltinScenes, SineLoadsAsSpecified) {
     EXPECT_EQ(water.material.type, MaterialType::Dielectric);
     EXPECT_DOUBLE_EQ(water.material.ior, 1.33);
     EXPECT_EQ(water.heightfield.generator, HeightGenerator::Sine);
-    EXPECT_EQ(water.heightfield.resolution, glm::ivec2(1024, 1024));
+    EXPECT_EQ(water.heightfield.resolution, glm::ivec2(640, 640));
+    // Five whole periods, so the surface also tiles; the patch covers the 1 m receiver with a margin.
+    EXPECT_EQ(water.heightfield.size, glm::dvec2(1.25, 1.25));
     EXPECT_DOUBLE_EQ(water.heightfield.amplitude, 0.01);
     EXPECT_DOUBLE_EQ(water.heightfield.wavelength, 0.25);
     EXPECT_EQ(s.receiver.object, "floor");
@@ -510,6 +512,16 @@ TEST_F(MalformedScene, DuplicateName) {
     expect_rejected(write_json(j), "objects[3].name", "duplicate");
 }
 
+TEST_F(MalformedScene, DuplicateKey) {
+    std::string text = base_.dump();
+    const std::string radius = "\"radius\":0.2";
+    text.replace(text.find(radius), radius.size(), radius + "," + radius);
+    expect_rejected(write(text), "objects[3].radius", "duplicate key");
+    text = base_.dump();
+    text.replace(text.find("{\"lights\""), 1, "{\"fresnel\":true,\"fresnel\":false,");
+    expect_rejected(write(text), "fresnel", "duplicate key");
+}
+
 TEST_F(MalformedScene, WrongTypes) {
     auto j = base_;
     j["fresnel"] = "yes";
@@ -737,7 +749,7 @@ HeightFieldDesc waves_desc() {
     d.wave_speed = 0.5;
     d.damping = 0.2;
     d.seed = 1;
-    d.period = 4.0;  // the animation length (load_scene sets it from frames / fps)
+    d.animation_length = 4.0;  // load_scene sets it from frames / fps
     return d;
 }
 
@@ -779,7 +791,7 @@ TEST(WavesGenerator, FrameBitsAreTheSameOnEveryMachine) {
 TEST(BuiltinScenes, PoolWavesAreAnimated) {
     const Scene s = load_scene(scene_path("pool.json"));
     EXPECT_EQ(s.animation.frames, 120);
-    EXPECT_DOUBLE_EQ(s.objects[0].heightfield.period, 4.0);
+    EXPECT_DOUBLE_EQ(s.objects[0].heightfield.animation_length, 4.0);
     EXPECT_THROW(build_frame_geometry(s, 120), InputError);
     const FrameGeometry a = build_frame_geometry(s, 119);
     const FrameGeometry b = build_frame_geometry(s, 60);

@@ -86,6 +86,21 @@ TEST(SweepSpec, ValidSpecExpandsToCartesianProduct) {
     EXPECT_EQ(spec.photons, 20000u);
 }
 
+TEST(SweepSpec, PerSceneFramesOverrideTheDefault) {
+    const fs::path d = temp_dir("frames");
+    const SweepSpec spec = load_sweep_spec(write_file(d / "s.json", R"({
+      "scenes": ["sine", {"scene": "gaussian", "frames": {"range": [0, 4, 2]}}], "frames": [0],
+      "methods": {"caustic_triangles": {}}})").string());
+    ASSERT_EQ(spec.scenes.size(), 2u);
+    EXPECT_EQ(spec.scenes[0].frames, std::vector<int>{0});
+    EXPECT_EQ(spec.scenes[1].frames, (std::vector<int>{0, 2, 4}));
+    const auto runs = plan_runs(spec);
+    ASSERT_EQ(runs.size(), 4u);   // a method with no axes runs once with its defaults
+    EXPECT_EQ(runs[3].scene_name, "gaussian");
+    EXPECT_EQ(runs[3].frame, 4);
+    EXPECT_TRUE(runs[3].params.empty());
+}
+
 TEST(SweepSpec, RangeAndPow2) {
     auto r = expand_axis_values(nlohmann::json::parse(R"({"range": [1, 9, 4]})"), "f", "k");
     ASSERT_EQ(r.size(), 3u);
@@ -114,6 +129,8 @@ TEST(SweepSpec, MalformedCatalog) {
         {"duplicate_axis", R"({"scenes": ["sine"], "methods": {"caustic_triangles": {"grid": [32], "grid": [64]}}})", "grid"},
         {"negative_repeats", R"({"scenes": ["sine"], "timing": {"repeats": -3}, )" + m + "}", "timing.repeats"},
         {"unknown_top_key", R"({"scenes": ["sine"], "sceens": [], )" + m + "}", "sceens"},
+        {"bad_scene_entry", R"({"scenes": [{"scene": "sine", "frame": [1]}], )" + m + "}", "scenes[0].frame"},
+        {"negative_frame", R"({"scenes": ["sine"], "frames": [-1], )" + m + "}", "frames"},
         {"no_methods", R"({"scenes": ["sine"], "methods": {}})", "methods"},
         {"bad_json", R"({"scenes": ["sine"], )", "JSON"},
     };

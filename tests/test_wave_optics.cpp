@@ -205,7 +205,9 @@ TEST(WavePropagator, AngularSpectrumLosesExactlyTheRemovedComponents) {
             EXPECT_NEAR(st.lost_fraction(), removed / total, 1e-6);
             EXPECT_NEAR(st.evanescent_energy / st.total_energy, evanescent / total, 1e-6);
             EXPECT_GT(removed / total, 1e-3) << "the test surface must actually lose energy";
-            if (z == 1.0) EXPECT_GT(limited / total, 1e-3) << "the band limit must be active";
+            if (z == 1.0) {
+                EXPECT_GT(limited / total, 1e-3) << "the band limit must be active";
+            }
         }
     }
 }
