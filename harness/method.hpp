@@ -45,15 +45,32 @@ struct Health {
     }
 };
 
+// A periodic caustic texture (Stam, "Periodic Caustic Textures"; `caustics synth`): the caustic
+// irradiance on a horizontal plane `depth` metres below the water surface's base level, over exactly one
+// spatial period of the water height field (its rectangle), so that the texture tiles the plane.
+// Texel (i, j) is centred at world x = x0 + (i + 1/2) Lx / width, y = y0 + (j + 1/2) Ly / height, where
+// (x0, y0) is the rectangle's corner of least x and y and Lx x Ly its size (row 0 at the least y).
+// Light leaving the tile on one side re-enters on the other (toroidal accumulation).
+struct TextureRequest {
+    int width = 512;
+    int height = 512;
+    double depth = 1.0;   // [m] below the water's base height
+};
+
 struct RenderRequest {
     const ReceiverChart* receiver = nullptr;     // fill CausticOutput::receiver when non-null
     const CameraGBuffer* camera = nullptr;       // fill CausticOutput::camera when non-null
+    // Fill CausticOutput::texture (and texture_rgb with dispersion) when non-null. Only methods whose
+    // texture_capability() says yes are asked; the others may ignore it.
+    const TextureRequest* texture = nullptr;
 };
 
 struct CausticOutput {
     Image receiver;       // chart width x height, 1 channel, E_c [W/m^2] (relative if not radiometric)
     Image receiver_rgb;   // optional colour version (dispersion), 3 channels
     Image camera;         // gbuffer width x height, 1 channel; only covered pixels are read
+    Image texture;        // TextureRequest width x height, 1 channel, E_c [W/m^2] (see TextureRequest)
+    Image texture_rgb;    // optional colour version of the texture (dispersion), 3 channels
     std::map<std::string, Image> debug;                  // optional: caustic map, overlays
     std::vector<std::pair<std::string, double>> stages_ms;  // optional per-stage timings of render()
     Health health;
@@ -63,6 +80,10 @@ class Method {
 public:
     virtual ~Method() = default;
     virtual Capability capabilities(const Scene& /*scene*/) const { return Capability::yes(); }
+    // Whether render() can fill a periodic texture (RenderRequest::texture) for this scene.
+    virtual Capability texture_capability(const Scene& /*scene*/) const {
+        return Capability::no("does not synthesise periodic textures");
+    }
     virtual void prepare(const Scene& /*scene*/) {}
     virtual void update(const FrameGeometry& /*frame*/) {}
     virtual CausticOutput render(const FrameGeometry& frame, const RenderRequest& request) = 0;

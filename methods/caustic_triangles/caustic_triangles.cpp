@@ -39,17 +39,25 @@ struct ChartMap {
     const HeightField* floor = nullptr;           // height-field receiver
     double orientation = 1.0;  // sign of the chart's (s, t) orientation seen from above (folds flip it)
 
+    // A plane through `o` spanned by the full edge vectors U, V (periodic textures: one tile).
+    ChartMap(const glm::dvec3& o, const glm::dvec3& U, const glm::dvec3& V) { set_plane(o, U, V); }
+    void set_plane(const glm::dvec3& o, const glm::dvec3& U, const glm::dvec3& V) {
+        plane = true;
+        origin = o;
+        normal = glm::normalize(glm::cross(U, V));
+        const double uu = glm::dot(U, U), uv = glm::dot(U, V), vv = glm::dot(V, V);
+        const double det = uu * vv - uv * uv;
+        dual_s = (vv * U - uv * V) / det;
+        dual_t = (uu * V - uv * U) / det;
+        orientation = glm::cross(U, V).z >= 0.0 ? 1.0 : -1.0;
+    }
+
     explicit ChartMap(const ReceiverChart& chart, const FrameGeometry& frame) {
         plane = chart.is_plane();
         origin = chart.point(0.0, 0.0);
         const glm::dvec3 U = chart.point(1.0, 0.0) - origin, V = chart.point(0.0, 1.0) - origin;
         if (plane) {
-            normal = glm::normalize(glm::cross(U, V));
-            const double uu = glm::dot(U, U), uv = glm::dot(U, V), vv = glm::dot(V, V);
-            const double det = uu * vv - uv * uv;
-            dual_s = (vv * U - uv * V) / det;
-            dual_t = (uu * V - uv * U) / det;
-            orientation = glm::cross(U, V).z >= 0.0 ? 1.0 : -1.0;
+            set_plane(origin, U, V);
         } else {
             dual_s = {1.0 / U.x, 0.0, 0.0};
             dual_t = {0.0, 1.0 / V.y, 0.0};
@@ -72,16 +80,21 @@ public:
           coverage_(p.get_enum("coverage") == "center" ? RasterCoverage::PixelCenter : RasterCoverage::Area) {}
 
     Capability capabilities(const Scene& scene) const override;
+    // Periodic textures: any scene this method supports (the caller checks that the surface tiles).
+    Capability texture_capability(const Scene& scene) const override { return capabilities(scene); }
     CausticOutput render(const FrameGeometry& frame, const RenderRequest& request) override;
 
 private:
     struct Counters {
         std::int64_t lost = 0, folded = 0, not_converged = 0;
     };
+    void ensure_topology();
+    void render_texture(const FrameGeometry& frame, const TextureRequest& request, CausticOutput& out);
     void resample_surface(const HeightField& hf);
     void compute_triangle_flux(const glm::dvec3& light_dir, double e0);
     Counters refract_vertices(const FrameGeometry& frame, const ChartMap& map, int width, int height,
-                              double ior, double absorption, const glm::dvec3& light_dir);
+                              double ior, double absorption, const glm::dvec3& light_dir,
+                              bool periodic_target = false);
     void triangle_values(const ChartMap& map, double scale, Counters& counters);
 
     int grid_;
@@ -198,7 +211,7 @@ void CausticTriangles::compute_triangle_flux(const glm::dvec3& light_dir, double
 // Refracts every surface vertex (exact Snell with the vertex normal) and intersects the receiver.
 CausticTriangles::Counters CausticTriangles::refract_vertices(const FrameGeometry& frame, const ChartMap& map,
                                                               int width, int height, double ior, double absorption,
-                                                              const glm::dvec3& light_dir) {
+                                                              const glm::dvec3& light_dir, bool periodic_target) {
     const int g = grid_;
     const bool fresnel = frame.scene->fresnel;
     const double eta = 1.0 / ior;   // air above, water below
@@ -264,7 +277,8 @@ CausticTriangles::Counters CausticTriangles::refract_vertices(const FrameGeometr
                     continue;
                 }
                 const glm::dvec2 st = map.coords(p + t * dir);
-                if (!(st.x >= 0.0 && st.x <= 1.0 && st.y >= 0.0 && st.y <= 1.0)) ++c.lost;
+                // A periodic target (texture tile) wraps: a point outside the tile is not lost.
+                if (!periodic_target && !(st.x >= 0.0 && st.x <= 1.0 && st.y >= 0.0 && st.y <= 1.0)) ++c.lost;
                 image_[v] = {static_cast<float>(st.x * width), static_cast<float>(st.y * height)};
                 weight_[v] = static_cast<float>(transmittance * std::exp(-absorption * t));
             }
@@ -309,11 +323,103 @@ void CausticTriangles::triangle_values(const ChartMap& map, double scale, Counte
     counters.folded += folded.load();
 }
 
+void CausticTriangles::ensure_topology() {
+    const int g = grid_;
+    if (triangles_.size() == 2 * static_cast<std::size_t>(g - 1) * (g - 1)) return;
+    // Two counter-clockwise (seen from above) triangles per cell; fixed for the method's life.
+    triangles_.clear();
+    for (unsigned j = 0; j + 1 < static_cast<unsigned>(g); ++j)
+        for (unsigned i = 0; i + 1 < static_cast<unsigned>(g); ++i) {
+            const unsigned v00 = j * g + i, v10 = v00 + 1, v01 = v00 + g, v11 = v01 + 1;
+            triangles_.push_back({v00, v10, v11});
+            triangles_.push_back({v00, v11, v01});
+        }
+}
+
+// Periodic caustic texture (Stam, "Periodic Caustic Textures"): the surface grid spans exactly one
+// spatial period (its last row and column repeat the first on a periodic surface), every vertex is
+// refracted onto the horizontal plane `depth` below the base level, and the triangles are accumulated
+// toroidally into the tile (a triangle leaving one side re-enters on the other), so the flux through the
+// tile is conserved: mean texture = E0 cos(theta_i) * transmittance * absorption.
+void CausticTriangles::render_texture(const FrameGeometry& frame, const TextureRequest& request, CausticOutput& out) {
+    const Scene& scene = *frame.scene;
+    const ObjectInstance* water = nullptr;
+    for (const ObjectInstance& o : frame.objects)
+        if (o.heightfield && o.object->material.type == MaterialType::Dielectric) water = &o;
+    const HeightField& hf = *water->heightfield;
+    const Material& material = water->object->material;
+    const glm::dvec3 light_dir = glm::normalize(scene.lights[0].direction);
+    const int W = request.width, H = request.height;
+    if (W <= 0 || H <= 0) throw std::invalid_argument("caustic_triangles: texture size must be positive");
+
+    Stopwatch clock;
+    ensure_topology();
+    resample_surface(hf);
+    compute_triangle_flux(light_dir, scene.lights[0].irradiance);
+    const glm::dvec2 size = hf.extent();
+    const double receiver_z = water->object->heightfield.base_height - request.depth;
+    const ChartMap map(glm::dvec3(hf.origin.x, hf.origin.y, receiver_z), glm::dvec3(size.x, 0.0, 0.0),
+                       glm::dvec3(0.0, size.y, 0.0));
+    const double scale = static_cast<double>(W) * H / (size.x * size.y);   // 1 / texel area
+    const double absorption = absorption_ ? material.absorption : 0.0;
+    double refract_ms = clock.ms(), raster_ms = 0.0;
+
+    const bool dispersive = material.dispersion > 0.0;
+    const int samples = dispersive ? dispersion_samples_ : 1;
+    Counters counters;
+    RasterStats raster_stats;
+    out.texture = Image(W, H);
+    if (dispersive) out.texture_rgb = Image(W, H, 3);
+    const auto weights = dispersive ? spectral_weights(samples) : std::vector<std::array<float, 3>>{};
+    for (int k = 0; k < samples; ++k) {
+        const double ior = material.ior + (dispersive ? material.dispersion * (k + 0.5) / samples : 0.0);
+        clock.reset();
+        const Counters c = refract_vertices(frame, map, W, H, ior, absorption, light_dir, true);
+        counters.lost += c.lost;
+        triangle_values(map, scale, counters);
+        refract_ms += clock.ms();
+
+        clock.reset();
+        Image& target = dispersive ? sample_map_ : out.texture;
+        if (dispersive) {
+            if (sample_map_.width != W || sample_map_.height != H) sample_map_ = Image(W, H);
+        }
+        const RasterStats s = raster_.draw({image_, triangles_, values_, {}}, {coverage_, true, false}, target);
+        raster_stats.nonfinite += s.nonfinite;
+        raster_stats.too_large += s.too_large;
+        if (dispersive) {
+            const std::array<float, 3> w = weights[static_cast<std::size_t>(k)];
+            const float mean = 1.0f / samples;
+            tbb::parallel_for(tbb::blocked_range<int>(0, H, 16), [&](const tbb::blocked_range<int>& rows) {
+                for (int y = rows.begin(); y != rows.end(); ++y)
+                    for (int x = 0; x < W; ++x) {
+                        const float e = sample_map_.at(x, y);
+                        out.texture.at(x, y) += mean * e;
+                        for (int ch = 0; ch < 3; ++ch) out.texture_rgb.at(x, y, ch) += w[ch] * e;
+                    }
+            });
+        }
+        raster_ms += clock.ms();
+    }
+    out.stages_ms.emplace_back("texture_refract", refract_ms);
+    out.stages_ms.emplace_back("texture_raster", raster_ms);
+    out.health.add("lost_samples", counters.lost);
+    out.health.add("folded_triangles", counters.folded);
+    out.health.add("nonfinite", raster_stats.nonfinite);
+    // Triangles spanning more than 3 x 3 tiles (their flux is lost): a depth far beyond the focus.
+    out.health.add("texture_too_large", raster_stats.too_large);
+    if (!hf.periodic) out.health.add("nonperiodic_surface", 1);
+}
+
 CausticOutput CausticTriangles::render(const FrameGeometry& frame, const RenderRequest& request) {
     CausticOutput out;
     const Scene& scene = *frame.scene;
     const Capability cap = capabilities(scene);
     if (!cap.supported) throw std::runtime_error("caustic_triangles: " + cap.reason);
+    if (request.texture) {
+        render_texture(frame, *request.texture, out);
+        if (!request.receiver && !request.camera) return out;
+    }
     const ReceiverChart* chart = request.receiver;
     if (!chart) throw std::invalid_argument("caustic_triangles: needs the receiver chart (camera lookups read it)");
 
@@ -322,20 +428,10 @@ CausticOutput CausticTriangles::render(const FrameGeometry& frame, const RenderR
         if (o.heightfield && o.object->material.type == MaterialType::Dielectric) water = &o;
     const Material& material = water->object->material;
     const glm::dvec3 light_dir = glm::normalize(scene.lights[0].direction);
-    const int g = grid_;
     const int W = chart->width(), H = chart->height();
 
     Stopwatch clock;
-    if (triangles_.size() != 2 * static_cast<std::size_t>(g - 1) * (g - 1)) {
-        // Two counter-clockwise (seen from above) triangles per cell; fixed for the method's life.
-        triangles_.clear();
-        for (unsigned j = 0; j + 1 < static_cast<unsigned>(g); ++j)
-            for (unsigned i = 0; i + 1 < static_cast<unsigned>(g); ++i) {
-                const unsigned v00 = j * g + i, v10 = v00 + 1, v01 = v00 + g, v11 = v01 + 1;
-                triangles_.push_back({v00, v10, v11});
-                triangles_.push_back({v00, v11, v01});
-            }
-    }
+    ensure_topology();
     resample_surface(*water->heightfield);
     compute_triangle_flux(light_dir, scene.lights[0].irradiance);
     const ChartMap map(*chart, frame);
@@ -445,7 +541,9 @@ MethodInfo caustic_triangles_info() {
         "Refracted surface triangles shaded by area ratio (Stam, Periodic Caustic Textures): every vertex of "
         "the water grid is refracted onto the receiver and each triangle deposits its flux over its image "
         "(exact area coverage); dispersion by several indices and a spectral ramp. Height-field water, "
-        "directional light; walls are not covered.";
+        "directional light; walls are not covered. Periodic textures (caustics synth): the surface over one "
+        "period is refracted onto a plane at the texture depth and its triangles are accumulated toroidally "
+        "(flux conserving over the tile).";
     info.radiometric = true;
     info.params = {
         {"grid", ParamType::Int, "256", 2, 4096, {},

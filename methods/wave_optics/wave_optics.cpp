@@ -52,7 +52,8 @@ const char* kDoc =
     "band limit removed more than 1 ppm of the energy), band_limited_ppm, evanescent_ppm, "
     "phase_aliased_cells (phase step > pi between neighbouring grid cells), not_covered (points above "
     "the water or lit from outside the surface's footprint). Transfer functions are cached per depth "
-    "and wavelength; walls shadowing the light are ignored.";
+    "and wavelength; walls shadowing the light are ignored. Periodic textures (caustics synth): the intensity "
+    "at the texture depth over the FFT period, periodic by construction, resampled bilinearly to the texels.";
 
 std::vector<ParamSpec> param_table() {
     std::vector<ParamSpec> p;
@@ -105,6 +106,50 @@ struct Spectral {
     std::unique_ptr<WavePropagator> propagator;
 };
 
+// Periodic texture from slice 0 of the table (its depth is geo.depths[0]): texel (i, j) is centred at
+// geo.origin + ((i + 1/2) lx / width, (j + 1/2) ly / height) on a horizontal plane; periodic bilinear
+// lookup in the grid x grid slice with the propagator's walk removed, as WaveFieldTable::lookup() does,
+// but without its coverage test (the field tiles), scaled to irradiance (a horizontal plane faces the
+// refracted beam by the factor 1 that lookup() divides out).
+void fill_texture(const WaveFieldTable& table, int n, const LookupGeometry& geo, Image& mono, Image* rgb) {
+    const int W = mono.width, H = mono.height;
+    const double z = geo.depths.empty() ? 0.0 : geo.depths.front();
+    const double dx = geo.lx / n, dy = geo.ly / n;
+    const double cos_t = std::max(1e-9, -geo.refracted.z);
+    const float scale = static_cast<float>(geo.irradiance * std::exp(-geo.absorption * z / cos_t));
+    auto wrap = [](int i, int m) {
+        i %= m;
+        return i < 0 ? i + m : i;
+    };
+    tbb::parallel_for(tbb::blocked_range<int>(0, H, 8), [&](const tbb::blocked_range<int>& r) {
+        for (int j = r.begin(); j < r.end(); ++j) {
+            const double ty = ((j + 0.5) * geo.ly / H - z * geo.walk.y) / dy;
+            const double fyf = std::floor(ty);
+            const float ay = static_cast<float>(ty - fyf);
+            const int ya = wrap(static_cast<int>(fyf), n), yb = wrap(ya + 1, n);
+            for (int i = 0; i < W; ++i) {
+                const double tx = ((i + 0.5) * geo.lx / W - z * geo.walk.x) / dx;
+                const double fxf = std::floor(tx);
+                const float ax = static_cast<float>(tx - fxf);
+                const int xa = wrap(static_cast<int>(fxf), n), xb = wrap(xa + 1, n);
+                auto bilinear = [&](int c) {
+                    const float* t = table.slice(0, c);
+                    const float v00 = t[static_cast<std::size_t>(ya) * n + xa];
+                    const float v10 = t[static_cast<std::size_t>(ya) * n + xb];
+                    const float v01 = t[static_cast<std::size_t>(yb) * n + xa];
+                    const float v11 = t[static_cast<std::size_t>(yb) * n + xb];
+                    const float top = v00 + ax * (v10 - v00);
+                    const float bottom = v01 + ax * (v11 - v01);
+                    return top + ay * (bottom - top);
+                };
+                mono.at(i, j) = scale * bilinear(0);
+                if (rgb != nullptr)
+                    for (int c = 0; c < 3; ++c) rgb->at(i, j, c) = scale * bilinear(c + 1);
+            }
+        }
+    });
+}
+
 class WaveOpticsMethod final : public Method {
 public:
     explicit WaveOpticsMethod(const ParamSet& p)
@@ -120,6 +165,8 @@ public:
         if (!find_setup(scene, why)) return Capability::no(why);
         return Capability::yes();
     }
+    // Periodic textures: the FFT field over the surface period is periodic by construction.
+    Capability texture_capability(const Scene& scene) const override { return capabilities(scene); }
 
     void prepare(const Scene& scene) override {
         std::string why;
@@ -200,6 +247,9 @@ public:
 
 private:
     bool find_setup(const Scene& scene, std::string& why) const;
+    void fill_table(const SurfaceSamples& surface, const std::vector<double>& depths, CausticOutput& out);
+    LookupGeometry lookup_geometry(const HeightField& hf, const SurfaceSamples& surface,
+                                   const std::vector<double>& depths) const;
     int grid_;
     double wavelength_;
     bool fresnel_;
@@ -246,6 +296,66 @@ bool WaveOpticsMethod::find_setup(const Scene& scene, std::string& why) const {
     return true;
 }
 
+// Step 4 of render(): per wavelength, phase screen and forward transform, then one inverse transform per
+// depth slice into the table (then the optional blur). Adds stage timings and health to `out`.
+void WaveOpticsMethod::fill_table(const SurfaceSamples& surface, const std::vector<double>& depths, CausticOutput& out) {
+    Stopwatch watch;
+    auto lap = [&watch] {
+        const double t = watch.ms();
+        watch.reset();
+        return t;
+    };
+    table_->begin(static_cast<int>(depths.size()));
+    double phase_ms = 0.0, propagate_ms = 0.0;
+    std::int64_t violations = 0, aliased = 0;
+    double band_ppm = 0.0, evan_ppm = 0.0, carrier_error = 0.0;
+    if (!depths.empty()) {
+        for (std::size_t m = 0; m < spectral_.size(); ++m) {
+            Spectral& sp = spectral_[m];
+            carrier_error = std::max(carrier_error, sp.carrier_error_rad);
+            aliased += sp.propagator->set_phase_screen(surface.height.data(), static_cast<float>(sp.phase_per_m));
+            phase_ms += lap();
+            for (std::size_t s = 0; s < depths.size(); ++s) {
+                IntensityTarget targets[4];
+                const int count = table_->targets(static_cast<int>(s), static_cast<int>(m), 1.0f / samples_, sp.rgb, targets);
+                const PropagationStats st = sp.propagator->propagate(depths[s], targets, count);
+                if (!st.sampling_ok) ++violations;
+                if (st.total_energy > 0.0) {
+                    band_ppm = std::max(band_ppm, 1e6 * st.band_limited_energy / st.total_energy);
+                    evan_ppm = std::max(evan_ppm, 1e6 * st.evanescent_energy / st.total_energy);
+                }
+            }
+            propagate_ms += lap();
+        }
+    }
+    out.stages_ms.emplace_back("phase_fft", phase_ms);
+    out.stages_ms.emplace_back("propagate", propagate_ms);
+    out.health.add("sampling_violations", violations);
+    out.health.add("phase_aliased_cells", aliased);
+    out.health.add("band_limited_ppm", std::llround(band_ppm));
+    out.health.add("evanescent_ppm", std::llround(evan_ppm));
+    out.health.add("carrier_error_urad", std::llround(carrier_error * 1e6));
+    if (blur_ > 0.0) table_->blur(blur_, lx_, ly_);
+    out.stages_ms.emplace_back("blur", lap());
+}
+
+// Lookup frame of the table for the frame's surface (step 5 of render(), and textures).
+LookupGeometry WaveOpticsMethod::lookup_geometry(const HeightField& hf, const SurfaceSamples& surface,
+                                                 const std::vector<double>& depths) const {
+    LookupGeometry geo;
+    geo.origin = glm::dvec2(hf.origin);
+    geo.lx = lx_;
+    geo.ly = ly_;
+    geo.level = surface.level;
+    geo.depths = depths;
+    geo.walk = spectral_.front().propagator->carrier_walk();
+    geo.refracted = refracted_;
+    geo.taper_band = surface.periodic ? 0.0 : surface.taper_band;
+    geo.irradiance = irradiance_ * cos_i_ * transmittance_;
+    geo.absorption = absorption_;
+    return geo;
+}
+
 CausticOutput WaveOpticsMethod::render(const FrameGeometry& frame, const RenderRequest& request) {
     CausticOutput out;
     Stopwatch watch;
@@ -259,6 +369,24 @@ CausticOutput WaveOpticsMethod::render(const FrameGeometry& frame, const RenderR
     const SurfaceSamples surface = table_->resample(hf, lx_, ly_);
     if (!surface.periodic) out.health.add("nonperiodic_surface", 1);
     out.stages_ms.emplace_back("resample", lap());
+
+    // Periodic texture (caustics synth): the table at the texture's one depth below the base level,
+    // sampled periodically at the texel centres (the FFT field is periodic by construction).
+    if (request.texture != nullptr) {
+        const TextureRequest& tr = *request.texture;
+        if (tr.width <= 0 || tr.height <= 0) throw std::invalid_argument("wave_optics: texture size must be positive");
+        const double base = frame.scene->objects[static_cast<std::size_t>(water_index_)].heightfield.base_height;
+        const double depth = surface.level - (base - tr.depth);   // below the mean level
+        if (!(depth > 0.0)) throw std::invalid_argument("wave_optics: the texture plane must lie below the water");
+        fill_table(surface, {depth}, out);
+        lap();
+        out.texture = Image(tr.width, tr.height, 1);
+        if (samples_ > 1) out.texture_rgb = Image(tr.width, tr.height, 3);
+        fill_texture(*table_, grid_, lookup_geometry(hf, surface, {depth}), out.texture,
+                     samples_ > 1 ? &out.texture_rgb : nullptr);
+        out.stages_ms.emplace_back("texture_lookup", lap());
+        if (request.receiver == nullptr && request.camera == nullptr) return out;
+    }
 
     // 2. The points to shade: receiver bin centres and covered camera pixels.
     std::vector<ShadePoint> points;
@@ -302,51 +430,11 @@ CausticOutput WaveOpticsMethod::render(const FrameGeometry& frame, const RenderR
     out.stages_ms.emplace_back("points", lap());
 
     // 4. Per wavelength: phase screen, forward transform, one inverse transform per slice.
-    table_->begin(static_cast<int>(depths.size()));
-    double phase_ms = 0.0, propagate_ms = 0.0;
-    std::int64_t violations = 0, aliased = 0;
-    double band_ppm = 0.0, evan_ppm = 0.0, carrier_error = 0.0;
-    if (!depths.empty()) {
-        for (std::size_t m = 0; m < spectral_.size(); ++m) {
-            Spectral& sp = spectral_[m];
-            carrier_error = std::max(carrier_error, sp.carrier_error_rad);
-            aliased += sp.propagator->set_phase_screen(surface.height.data(), static_cast<float>(sp.phase_per_m));
-            phase_ms += lap();
-            for (std::size_t s = 0; s < depths.size(); ++s) {
-                IntensityTarget targets[4];
-                const int count = table_->targets(static_cast<int>(s), static_cast<int>(m), 1.0f / samples_, sp.rgb, targets);
-                const PropagationStats st = sp.propagator->propagate(depths[s], targets, count);
-                if (!st.sampling_ok) ++violations;
-                if (st.total_energy > 0.0) {
-                    band_ppm = std::max(band_ppm, 1e6 * st.band_limited_energy / st.total_energy);
-                    evan_ppm = std::max(evan_ppm, 1e6 * st.evanescent_energy / st.total_energy);
-                }
-            }
-            propagate_ms += lap();
-        }
-    }
-    out.stages_ms.emplace_back("phase_fft", phase_ms);
-    out.stages_ms.emplace_back("propagate", propagate_ms);
-    out.health.add("sampling_violations", violations);
-    out.health.add("phase_aliased_cells", aliased);
-    out.health.add("band_limited_ppm", std::llround(band_ppm));
-    out.health.add("evanescent_ppm", std::llround(evan_ppm));
-    out.health.add("carrier_error_urad", std::llround(carrier_error * 1e6));
-    if (blur_ > 0.0) table_->blur(blur_, lx_, ly_);
-    out.stages_ms.emplace_back("blur", lap());
+    fill_table(surface, depths, out);
+    lap();
 
     // 5. Look the intensity up at every point, scaled to irradiance.
-    LookupGeometry geo;
-    geo.origin = glm::dvec2(hf.origin);
-    geo.lx = lx_;
-    geo.ly = ly_;
-    geo.level = surface.level;
-    geo.depths = depths;
-    geo.walk = spectral_.front().propagator->carrier_walk();
-    geo.refracted = refracted_;
-    geo.taper_band = surface.periodic ? 0.0 : surface.taper_band;
-    geo.irradiance = irradiance_ * cos_i_ * transmittance_;
-    geo.absorption = absorption_;
+    const LookupGeometry geo = lookup_geometry(hf, surface, depths);
     std::vector<glm::vec4> values(points.size());
     LookupCounters counters;
     table_->lookup(geo, points, values, counters);
