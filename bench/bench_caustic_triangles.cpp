@@ -42,7 +42,9 @@ void run(benchmark::State& state, bool with_camera) {
     tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
     PoolFixture& f = PoolFixture::get();
     const MethodInfo& info = require_method("caustic_triangles");
-    auto method = info.create(ParamSet::resolve(info.name, info.params, {{"grid", std::to_string(state.range(0))}}));
+    const char* coverage = state.range(2) ? "center" : "area";
+    auto method = info.create(ParamSet::resolve(info.name, info.params,
+                                                {{"grid", std::to_string(state.range(0))}, {"coverage", coverage}}));
     method->prepare(f.scene);
     method->update(f.frame);
     RenderRequest request;
@@ -72,9 +74,10 @@ void BM_CausticTrianglesPoolCamera(benchmark::State& state) { run(state, true); 
 
 }  // namespace
 
-// Args: grid, threads. The 1-thread run gives the per-frame CPU cost where other work shares the cores.
+// Args: grid, threads, coverage (0 area, 1 centre). The 1-thread run gives the per-frame CPU cost where
+// other work shares the cores.
 BENCHMARK(BM_CausticTrianglesPool)
-    ->Args({128, 2})->Args({256, 2})->Args({512, 2})->Args({256, 1})
+    ->Args({128, 2, 0})->Args({256, 2, 0})->Args({512, 2, 0})->Args({256, 1, 0})->Args({256, 2, 1})
     ->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_CausticTrianglesPoolCamera)->Args({256, 2})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_CausticTrianglesPoolCamera)->Args({256, 2, 0})->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_MAIN();

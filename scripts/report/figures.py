@@ -61,13 +61,15 @@ def time_vs_error(frame, scene, directory):
 def error_vs_iterations(frame, scene, directory):
     runs = ok_runs(frame[frame["scene"] == scene])
     runs = runs[np.isfinite(runs.get("iterations", np.nan))] if "iterations" in runs else runs.iloc[0:0]
-    if runs.empty or runs["iterations"].nunique() < 2:
+    if runs.empty:
+        return None
+    # Only (method, grid) pairs that were run at several iteration counts make a line.
+    lines = [(key, g) for key, g in runs.groupby(["label", "grid"]) if g["iterations"].nunique() >= 2]
+    if not lines:
         return None
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
     style = _style(runs["label"].unique())
-    for (label, grid), group in runs.groupby(["label", "grid"]):
-        if group["iterations"].nunique() < 2:
-            continue
+    for (label, grid), group in lines:
         g = group.groupby("iterations")["error"].median().sort_index()
         color, marker = style[label]
         ax.plot(g.index, g.values, color=color, marker=marker, label=f"{label}, grid {int(grid)}",
@@ -87,8 +89,8 @@ def fps_vs_grid(frame, scene, directory):
     if runs.empty or runs["grid"].nunique() < 2:
         return None
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
-    style = _style(runs["label"].unique())
-    for label, group in runs.groupby("label"):
+    style = _style(runs["method"].unique())   # speed is not fitted: plain method names
+    for label, group in runs.groupby("method"):
         g = group.groupby("grid")["fps"].median().sort_index()
         if len(g) < 2:
             continue
@@ -98,7 +100,7 @@ def fps_vs_grid(frame, scene, directory):
     ax.set_xscale("log", base=2)
     ax.set_yscale("log")
     ax.set_xlabel("grid resolution  (log2)")
-    ax.set_ylabel("frames per second  (log)")
+    ax.set_ylabel("frames per second of render()  (log)")
     ax.set_title(f"{scene}: fps vs grid (fitted log-log slope)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
