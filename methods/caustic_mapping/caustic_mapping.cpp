@@ -1,0 +1,463 @@
+// caustic_mapping: Shah, Konttinen, Pattanaik 2007 (shared/papers/000), on the shared software raster.
+// Per frame, as the paper's render passes (Sec. III.B):
+//   1. receivers (diffuse objects) -> positions texture from the light (map x map; a six-face cube map
+//      for point lights whose receivers leave one frustum, Sec. III.F);
+//   2. specular objects -> front positions/normals at grid x grid (one vertex per texel); closed
+//      dielectrics also -> back-face positions/normals (Wyman's double-surface refraction);
+//   3. per grid vertex: refract (or reflect), estimate the exit point against the back-face texture and
+//      the receiver point against the receivers' texture (estimator.hpp), weight (Eq. 6 or radiometric,
+//      Eq. 7 absorption), splat into the caustic map (additive), optional low-pass;
+//   4. receiver map and camera view: project each point into the light view, depth test against the
+//      receivers' texture, read the caustic map, divide by the receiver area of a texel -> irradiance.
+#include "caustic_mapping.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <tbb/blocked_range.h>
+#include <tbb/combinable.h>
+#include <tbb/parallel_for.h>
+
+#include "timing.hpp"
+
+namespace caustics::caustic_mapping {
+
+void Counters::add(const Counters& o) {
+    covered += o.covered, grazing += o.grazing, null_value += o.null_value, null_exit += o.null_exit;
+    not_converged += o.not_converged, oscillating += o.oscillating, bisection += o.bisection;
+    bad_derivative += o.bad_derivative, tir += o.tir, nonfinite += o.nonfinite, lookups += o.lookups;
+    lost_outside += o.lost_outside;
+}
+
+namespace {
+
+// Refraction of unit I through unit N facing against I (dot(I, N) < 0), eta = n_from / n_to.
+bool refract(const glm::dvec3& I, const glm::dvec3& N, double eta, glm::dvec3& T, double& cos_i, double& cos_t) {
+    cos_i = -glm::dot(I, N);
+    const double k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
+    if (k < 0.0) return false;
+    cos_t = std::sqrt(k);
+    T = glm::normalize(eta * I + (eta * cos_i - cos_t) * N);
+    return true;
+}
+
+// Unpolarised Fresnel transmittance from index n1 into n2.
+double fresnel_t(double cos_i, double cos_t, double n1, double n2) {
+    const double rs = (n1 * cos_i - n2 * cos_t) / (n1 * cos_i + n2 * cos_t);
+    const double rp = (n2 * cos_i - n1 * cos_t) / (n2 * cos_i + n1 * cos_t);
+    return 1.0 - 0.5 * (rs * rs + rp * rp);
+}
+
+struct FaceSplat {
+    int face;
+    Splat splat;
+};
+
+class CausticMapping final : public Method {
+public:
+    explicit CausticMapping(const ParamSet& p) : s_(settings_from(p)) {}
+
+    Capability capabilities(const Scene& scene) const override;
+    void update(const FrameGeometry& frame) override {
+        batches_ = build_batches(frame, s_.grid);
+        frame_ = &frame;
+        frame_index_ = frame.frame;
+    }
+    CausticOutput render(const FrameGeometry& frame, const RenderRequest& request) override;
+
+private:
+    void draw_gbuffers(const FrameGeometry& frame, const Light& light, Counters& c, std::int64_t& clipped);
+    void trace(const Scene& scene, const Light& light, Counters& total);
+    double irradiance(const glm::dvec3& p, const glm::dvec3& n, std::int64_t& outside, std::int64_t& shadowed) const;
+
+    Settings s_;
+    std::vector<Batch> batches_;
+    const FrameGeometry* frame_ = nullptr;
+    int frame_index_ = -1;
+
+    LightProjection object_view_;
+    GBuffer front_, back_;
+    bool have_back_ = false;
+    PositionsTexture receivers_;    // faces + G-buffers of the receivers
+    PositionsTexture back_tex_;     // the back faces of closed dielectrics (one face, grid x grid)
+    GBufferRaster raster_;
+    SplatRaster splatter_;
+    std::vector<FaceSplat> landing_;   // per grid texel: where its light lands (value 0: nowhere)
+    std::vector<std::vector<Splat>> face_splats_;
+    std::vector<Image> caustic_;    // per face: flux per texel [W]
+    double radius_used_ = 0.0;
+};
+
+Capability CausticMapping::capabilities(const Scene& scene) const {
+    if (scene.lights.size() != 1) return Capability::no("needs exactly one light (directional or point)");
+    if (scene.medium.present && (scene.medium.absorption > 0.0 || scene.medium.scattering > 0.0 || scene.medium.ior != 1.0))
+        return Capability::no("participating media are not supported");
+    int specular = 0;
+    Bounds3 bounds;
+    for (const Object& o : scene.objects) {
+        if (!o.material.is_specular()) continue;
+        ++specular;
+        if (o.material.type == MaterialType::Dielectric && o.material.dispersion > 0.0)
+            return Capability::no("dispersion is not supported (one index per dielectric)");
+        if (o.shape == ShapeType::Sphere) {
+            bounds.extend(o.center - glm::dvec3(o.radius));
+            bounds.extend(o.center + glm::dvec3(o.radius));
+        } else if (o.shape == ShapeType::Mesh) {
+            for (const glm::vec3& p : o.mesh.positions) bounds.extend(glm::dvec3(p));
+        }
+    }
+    if (specular == 0) return Capability::no("the scene has no specular (dielectric or mirror) object");
+    const Light& l = scene.lights[0];
+    if (l.type == LightType::Point && bounds.valid() && glm::all(glm::greaterThan(l.position, bounds.lo)) &&
+        glm::all(glm::lessThan(l.position, bounds.hi)))
+        return Capability::no("a point light inside a specular object's bounds is not supported");
+    return Capability::yes();
+}
+
+void CausticMapping::draw_gbuffers(const FrameGeometry& frame, const Light& light, Counters& c, std::int64_t& clipped) {
+    Bounds3 spec, recv;
+    bool have_double = false;
+    for (const Batch& b : batches_) (b.role == Role::Receiver ? recv : spec).extend(b.bounds);
+    for (const Batch& b : batches_) have_double |= b.role == Role::DoubleSurface;
+    const bool point = light.type == LightType::Point;
+    // The object's grid: a frustum fitted to the specular objects (one vertex per texel).
+    if (point) {
+        if (!fit_perspective(light.position, spec, s_.grid, s_.grid, object_view_, 85.0))
+            throw std::runtime_error("caustic_mapping: the specular objects do not fit one light frustum");
+    } else {
+        object_view_ = fit_orthographic(light.direction, spec, s_.grid, s_.grid);
+    }
+    front_.clear(s_.grid, s_.grid);
+    for (const Batch& b : batches_) {
+        if (b.role == Role::Receiver) continue;
+        const CullMode cull = b.role == Role::DoubleSurface ? CullMode::Back : CullMode::None;
+        clipped += raster_.draw(object_view_, b.triangles(), cull, DepthTest::Less, front_).clipped;
+    }
+    have_back_ = have_double;
+    if (have_double) {
+        back_.clear(s_.grid, s_.grid);
+        for (const Batch& b : batches_)
+            if (b.role == Role::DoubleSurface)
+                clipped += raster_.draw(object_view_, b.triangles(), CullMode::Front, DepthTest::Less, back_).clipped;
+        back_tex_.faces.assign(1, object_view_);
+        back_tex_.maps.resize(1);
+        std::swap(back_tex_.maps[0], back_);
+        back_tex_.cube = false;
+        back_tex_.bilinear = s_.bilinear;
+    }
+    // Receivers' positions texture: one frustum or a cube map.
+    receivers_.bilinear = s_.bilinear;
+    receivers_.faces.clear();
+    // Room for the extrapolated rim inside the frustum (a margin of `extend` texels per side).
+    const int extend = std::min(s_.extend, s_.map / 8);   // at most an eighth of the map per side
+    const double margin = std::max(0.01, extend / static_cast<double>(s_.map - 2 * extend));
+    if (!point) {
+        receivers_.faces.push_back(fit_orthographic(light.direction, recv, s_.map, s_.map, margin));
+        receivers_.cube = false;
+    } else {
+        // off: one frustum, clamped to 80 degrees off-axis (receivers beyond it get no caustic: counted).
+        LightProjection single;
+        const bool fits = s_.cube != CubeMode::On &&
+                          fit_perspective(light.position, recv, s_.map, s_.map, single, s_.cube == CubeMode::Off ? 80.0 : 60.0,
+                                          margin, s_.cube == CubeMode::Off);
+        receivers_.cube = !fits;
+        if (fits) receivers_.faces.push_back(single);
+        else for (const LightProjection& f : cube_faces(light.position, s_.map)) receivers_.faces.push_back(f);
+    }
+    receivers_.maps.resize(receivers_.faces.size());
+    for (std::size_t f = 0; f < receivers_.faces.size(); ++f) {
+        receivers_.maps[f].clear(s_.map, s_.map, DepthTest::Less, false);   // positions and depth only
+        for (const Batch& b : batches_)
+            if (b.role == Role::Receiver)
+                clipped += raster_.draw(receivers_.faces[f], b.triangles(), CullMode::None, DepthTest::Less,
+                                        receivers_.maps[f]).clipped;
+        extend_positions(receivers_.maps[f], extend);
+    }
+    (void)frame;
+    (void)c;
+}
+
+void CausticMapping::trace(const Scene& scene, const Light& light, Counters& total) {
+    const int g = s_.grid;
+    const bool point = light.type == LightType::Point;
+    const double strength = point ? light.intensity : light.irradiance;
+    // Light carried by grid texel (x, y): E0 * texel area or I * texel solid angle.
+    auto texel_flux = [&](int x, int y) {
+        return strength * (point ? object_view_.texel_solid_angle(x + 0.5, y + 0.5) : object_view_.texel_area());
+    };
+    auto light_dir = [&](const glm::dvec3& v) {
+        return point ? glm::normalize(v - light.position) : glm::normalize(light.direction);
+    };
+    // Eq. 6 needs V (covered texels) and, to carry units, the total flux through them.
+    double paper_scale = 0.0;
+    if (s_.flux == FluxWeight::Paper) {
+        double sum = 0.0;
+        std::int64_t covered = 0;
+        for (int y = 0; y < g; ++y)
+            for (int x = 0; x < g; ++x)
+                if (front_.id[front_.index(x, y)] >= 0) {
+                    ++covered;
+                    sum += texel_flux(x, y);
+                }
+        paper_scale = covered > 0 ? sum / static_cast<double>(covered) : 0.0;
+    }
+    landing_.assign(static_cast<std::size_t>(g) * g, FaceSplat{0, {glm::vec2(0.0f), 0.0f}});
+    tbb::combinable<Counters> counters;
+    const Scene* sc = &scene;
+    tbb::parallel_for(tbb::blocked_range<int>(0, g, 4), [&](const tbb::blocked_range<int>& rows) {
+        Counters& c = counters.local();
+        for (int y = rows.begin(); y != rows.end(); ++y) {
+            for (int x = 0; x < g; ++x) {
+                const std::size_t i = front_.index(x, y);
+                const int id = front_.id[i];
+                if (id < 0) continue;
+                ++c.covered;
+                const Batch& b = batches_[static_cast<std::size_t>(id)];
+                const Material& mat = *b.material;
+                const glm::dvec3 v(front_.position[i]);
+                glm::dvec3 n(front_.normal[i]);
+                const glm::dvec3 L = light_dir(v);
+                if (b.role != Role::DoubleSurface && glm::dot(n, L) > 0.0) n = -n;   // open surfaces: either side
+                double weight = 1.0, cos_i = -glm::dot(L, n), cos_t = 0.0;
+                if (!(cos_i > 0.0)) {   // interpolated normal facing away at a silhouette
+                    ++c.grazing;
+                    continue;
+                }
+                const double flux = s_.flux == FluxWeight::Paper ? paper_scale * cos_i : texel_flux(x, y);
+                glm::dvec3 origin = v, dir;
+                if (b.role == Role::Mirror) {
+                    dir = L + 2.0 * cos_i * n;
+                } else {
+                    if (!refract(L, n, 1.0 / mat.ior, dir, cos_i, cos_t)) {
+                        ++c.tir;
+                        continue;
+                    }
+                    if (sc->fresnel) weight *= fresnel_t(cos_i, cos_t, 1.0, mat.ior);
+                }
+                if (b.role == Role::DoubleSurface) {
+                    // Exit point: the same estimator against the back-face texture, started from the
+                    // front-to-back distance of this texel (Wyman's d_V).
+                    double start = s_.estimator.d0;
+                    if (back_tex_.maps[0].id[i] >= 0) start = glm::length(glm::dvec3(back_tex_.maps[0].position[i]) - v);
+                    const EstimateResult e = estimate_intersection(back_tex_, v, dir, s_.estimator, start);
+                    c.lookups += e.lookups;
+                    c.oscillating += e.oscillating, c.bisection += e.bisected, c.bad_derivative += e.bad_derivative;
+                    c.not_converged += !e.converged;
+                    glm::dvec3 q, ne;
+                    if (!e.hit || !back_tex_.fetch(v + e.d * dir, q, &ne)) {
+                        ++c.null_exit;
+                        c.nonfinite += e.nonfinite;
+                        continue;
+                    }
+                    const double inside = glm::length(e.point - v);
+                    if (s_.absorption && mat.absorption > 0.0) weight *= std::exp(-mat.absorption * inside);   // Eq. 7
+                    const glm::dvec3 N = glm::dot(dir, ne) > 0.0 ? -ne : ne;
+                    glm::dvec3 out_dir;
+                    if (!refract(dir, N, mat.ior, out_dir, cos_i, cos_t)) {
+                        ++c.tir;
+                        continue;
+                    }
+                    if (sc->fresnel) weight *= fresnel_t(cos_i, cos_t, mat.ior, 1.0);
+                    origin = e.point;
+                    dir = out_dir;
+                }
+                const EstimateResult e = estimate_intersection(receivers_, origin, dir, s_.estimator, s_.estimator.d0);
+                c.lookups += e.lookups;
+                c.oscillating += e.oscillating, c.bisection += e.bisected, c.bad_derivative += e.bad_derivative;
+                c.not_converged += e.hit && !e.converged;
+                if (!e.hit) {
+                    c.null_value += e.null_value;
+                    c.nonfinite += e.nonfinite;
+                    continue;
+                }
+                // Single surfaces (water): attenuation between the surface and the receiver (Sec. III.E).
+                if (b.role == Role::SingleSurface && s_.absorption && mat.absorption > 0.0)
+                    weight *= std::exp(-mat.absorption * glm::length(e.point - origin));
+                Texel t;
+                if (!receivers_.locate(e.point, t)) {
+                    ++c.lost_outside;
+                    continue;
+                }
+                const float value = static_cast<float>(flux * weight);
+                if (!std::isfinite(value)) {
+                    ++c.nonfinite;
+                    continue;
+                }
+                landing_[i] = {t.face, {glm::vec2(static_cast<float>(t.px), static_cast<float>(t.py)), value}};
+            }
+        }
+    });
+    counters.combine_each([&](const Counters& c) { total.add(c); });
+}
+
+double CausticMapping::irradiance(const glm::dvec3& p, const glm::dvec3& n, std::int64_t& outside,
+                                  std::int64_t& shadowed) const {
+    Texel t;
+    if (!receivers_.locate(p, t)) {
+        ++outside;
+        return 0.0;
+    }
+    const std::size_t f = static_cast<std::size_t>(t.face);
+    const LightProjection& view = receivers_.faces[f];
+    const GBuffer& g = receivers_.maps[f];
+    const int W = g.width, H = g.height;
+    const int ix = std::clamp(static_cast<int>(t.px), 0, W - 1), iy = std::clamp(static_cast<int>(t.py), 0, H - 1);
+    const std::size_t i = g.index(ix, iy);
+    if (g.id[i] == -1) {
+        ++outside;
+        return 0.0;
+    }
+    const Image& map = caustic_[f];
+    const double fx = std::clamp(t.px - 0.5, 0.0, W - 1.0), fy = std::clamp(t.py - 0.5, 0.0, H - 1.0);
+    const int x0 = std::min(static_cast<int>(fx), W - 2 < 0 ? 0 : W - 2), y0 = std::min(static_cast<int>(fy), H - 2 < 0 ? 0 : H - 2);
+    const int x1 = std::min(x0 + 1, W - 1), y1 = std::min(y0 + 1, H - 1);
+    const double ax = fx - x0, ay = fy - y0;
+    const double flux = (1 - ay) * ((1 - ax) * map.at(x0, y0) + ax * map.at(x1, y0)) +
+                        ay * ((1 - ax) * map.at(x0, y1) + ax * map.at(x1, y1));
+    if (flux == 0.0) return 0.0;   // no caustic here: the depth test cannot change that
+    // Shadow-map depth test with a slope-scaled bias of about two texels.
+    const glm::dvec3 to = view.type == ProjectionType::Perspective ? glm::normalize(p - view.eye) : view.forward;
+    const double c = std::max(std::abs(glm::dot(n, to)), 0.05);
+    const double texel = std::sqrt(view.texel_area()) * (view.type == ProjectionType::Perspective ? t.depth : 1.0);
+    const double bias = s_.depth_bias * 2.0 * texel * (1.0 + std::sqrt(1.0 - c * c) / c);
+    if (t.depth > g.depth[i] + bias) {
+        ++shadowed;
+        return 0.0;
+    }
+    return flux / view.surface_texel_area(p, n);
+}
+
+CausticOutput CausticMapping::render(const FrameGeometry& frame, const RenderRequest& request) {
+    CausticOutput out;
+    const Scene& scene = *frame.scene;
+    const Capability cap = capabilities(scene);
+    if (!cap.supported) throw std::runtime_error("caustic_mapping: " + cap.reason);
+    if (frame_ != &frame || frame_index_ != frame.frame || batches_.size() != frame.objects.size()) update(frame);
+    const Light& light = scene.lights[0];
+    Counters c;
+    std::int64_t clipped = 0;
+
+    Stopwatch clock;
+    draw_gbuffers(frame, light, c, clipped);
+    out.stages_ms.emplace_back("gbuffers", clock.ms());
+
+    clock.reset();
+    trace(scene, light, c);
+    out.stages_ms.emplace_back("estimator", clock.ms());
+
+    clock.reset();
+    const std::size_t faces = receivers_.faces.size();
+    face_splats_.resize(faces);
+    for (auto& v : face_splats_) v.clear();
+    // Auto radius: 2.5 grid spacings measured in caustic-map texels (sigma = 0.71 spacing), the spacing
+    // being the ratio of the two light-space texel sizes (same eye: tangent sizes for point lights).
+    const double ratio = std::sqrt(object_view_.texel_area() / receivers_.faces[0].texel_area());
+    radius_used_ = s_.splat_radius > 0.0 ? s_.splat_radius : 2.5 * ratio;
+    // Adaptive: each splat's radius is 2.5 times the largest distance (in map texels) to the landing
+    // points of its four grid neighbours, at least the radius above, at most 64 texels: the footprint
+    // follows the local ray spacing where the light spreads (no gaps between splats, Sec. III.F).
+    const int g = s_.grid;
+    for (int y = 0; y < g; ++y)
+        for (int x = 0; x < g; ++x) {
+            const FaceSplat& fs = landing_[static_cast<std::size_t>(y) * g + x];
+            if (!(fs.splat.value > 0.0f)) continue;
+            Splat sp = fs.splat;
+            if (s_.adaptive) {
+                float spacing = 0.0f;
+                const int nb[4][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
+                for (const auto& d : nb) {
+                    const int xx = x + d[0], yy = y + d[1];
+                    if (xx < 0 || yy < 0 || xx >= g || yy >= g) continue;
+                    const FaceSplat& o = landing_[static_cast<std::size_t>(yy) * g + xx];
+                    if (!(o.splat.value > 0.0f) || o.face != fs.face) continue;
+                    spacing = std::max(spacing, glm::length(o.splat.pixel - sp.pixel));
+                }
+                sp.radius = std::clamp(2.5f * spacing, static_cast<float>(radius_used_), 64.0f);
+            }
+            face_splats_[static_cast<std::size_t>(fs.face)].push_back(sp);
+        }
+    caustic_.resize(faces);
+    SplatStats splat_stats;
+    for (std::size_t f = 0; f < faces; ++f) {
+        caustic_[f] = Image(s_.map, s_.map);
+        const SplatStats st = splatter_.draw(face_splats_[f], s_.splat, radius_used_, caustic_[f]);
+        splat_stats.splatted += st.splatted, splat_stats.outside += st.outside, splat_stats.nonfinite += st.nonfinite;
+        if (s_.lowpass >= 1.0) gaussian_lowpass(caustic_[f], s_.lowpass);
+    }
+    out.stages_ms.emplace_back("splat", clock.ms());
+
+    std::int64_t outside = 0, shadowed = 0;
+    if (request.receiver) {
+        clock.reset();
+        const ReceiverChart& chart = *request.receiver;
+        const int W = chart.width(), H = chart.height();
+        out.receiver = Image(W, H);
+        tbb::combinable<std::pair<std::int64_t, std::int64_t>> cnt;
+        tbb::parallel_for(tbb::blocked_range<int>(0, H, 4), [&](const tbb::blocked_range<int>& rows) {
+            auto& [o, sh] = cnt.local();
+            for (int y = rows.begin(); y != rows.end(); ++y)
+                for (int x = 0; x < W; ++x) {
+                    // n x n stratified points per bin (n = 1: the bin centre, as the paper's per-pixel lookup).
+                    const int n = s_.bin_samples;
+                    double sum = 0.0;
+                    for (int b = 0; b < n; ++b)
+                        for (int a = 0; a < n; ++a) {
+                            const double s = (x + (a + 0.5) / n) / W, t = (y + (b + 0.5) / n) / H;
+                            sum += irradiance(chart.point(s, t), chart.normal(s, t), o, sh);
+                        }
+                    out.receiver.at(x, y) = static_cast<float>(sum / (n * n));
+                }
+        });
+        cnt.combine_each([&](const auto& p) { outside += p.first, shadowed += p.second; });
+        out.stages_ms.emplace_back("receiver_lookup", clock.ms());
+    }
+    if (request.camera) {
+        clock.reset();
+        const CameraGBuffer& gb = *request.camera;
+        out.camera = Image(gb.width, gb.height);
+        tbb::combinable<std::pair<std::int64_t, std::int64_t>> cnt;
+        tbb::parallel_for(tbb::blocked_range<int>(0, gb.height, 4), [&](const tbb::blocked_range<int>& rows) {
+            auto& [o, sh] = cnt.local();
+            for (int y = rows.begin(); y != rows.end(); ++y)
+                for (int x = 0; x < gb.width; ++x) {
+                    const std::size_t i = gb.index(x, y);
+                    if (!gb.covered[i]) continue;
+                    out.camera.at(x, y) = static_cast<float>(
+                        irradiance(glm::dvec3(gb.position[i]), glm::dvec3(gb.normal[i]), o, sh));
+                }
+        });
+        cnt.combine_each([&](const auto& p) { outside += p.first, shadowed += p.second; });
+        out.stages_ms.emplace_back("camera_lookup", clock.ms());
+    }
+    if (s_.debug_maps) {
+        Image m = caustic_[0];
+        out.debug["caustic_map"] = std::move(m);
+    }
+    Health& h = out.health;
+    h.add("covered_texels", c.covered);
+    h.add("null_value", c.null_value);
+    h.add("null_exit", c.null_exit);
+    h.add("lost_samples", c.null_value + c.null_exit + c.tir + c.grazing + c.lost_outside + splat_stats.outside);
+    h.add("not_converged", c.not_converged);
+    h.add("oscillating", c.oscillating);
+    h.add("bisection_fallbacks", c.bisection);
+    h.add("bad_derivative", c.bad_derivative);
+    h.add("total_internal_reflections", c.tir);
+    h.add("grazing_texels", c.grazing);
+    h.add("splats", splat_stats.splatted);
+    h.add("splats_outside_map", splat_stats.outside + c.lost_outside);
+    h.add("nonfinite", c.nonfinite + splat_stats.nonfinite);
+    h.add("estimator_lookups", c.lookups);
+    h.add("lookups_outside_map", outside);
+    h.add("shadowed_lookups", shadowed);   // failed the depth test where the map holds caustic flux
+    h.add("clipped_triangles", clipped);
+    h.add("cube_map", receivers_.cube ? 1 : 0);
+    return out;
+}
+
+}  // namespace
+
+std::unique_ptr<Method> make_caustic_mapping(const ParamSet& p) { return std::make_unique<CausticMapping>(p); }
+
+}  // namespace caustics::caustic_mapping

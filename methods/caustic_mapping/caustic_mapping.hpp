@@ -1,0 +1,49 @@
+#pragma once
+// caustic_mapping: Shah, Konttinen, Pattanaik, "Caustics Mapping: An Image-space Technique for Real-time
+// Caustics" (2007; shared/papers/000). Internal interface shared by the plugin's translation units.
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "estimator.hpp"
+#include "geometry.hpp"
+#include "method.hpp"
+#include "positions_texture.hpp"
+#include "splat.hpp"
+
+namespace caustics::caustic_mapping {
+
+enum class FluxWeight { Radiometric, Paper };
+enum class CubeMode { Auto, Off, On };
+
+struct Settings {
+    int grid = 128;
+    int map = 768;
+    EstimatorSettings estimator;
+    FluxWeight flux = FluxWeight::Radiometric;
+    SplatKernel splat = SplatKernel::Gaussian;
+    bool adaptive = false;         // per-splat radius from the neighbours' landing spacing
+    double splat_radius = 0.0;   // texels; 0: auto (2.5 grid spacings in caustic-map texels)
+    double lowpass = 0.0;        // texels; 0: off
+    CubeMode cube = CubeMode::Auto;
+    bool bilinear = true;
+    int bin_samples = 1;           // receiver map: n x n lookups per bin
+    int extend = 32;               // texels the receivers' positions are extrapolated past their edges
+    bool absorption = true;
+    double depth_bias = 1.0;
+    bool debug_maps = false;
+};
+
+// Per-render health, summed over threads.
+struct Counters {
+    std::int64_t covered = 0, grazing = 0, null_value = 0, null_exit = 0, not_converged = 0, oscillating = 0,
+                 bisection = 0, bad_derivative = 0, tir = 0, nonfinite = 0, lookups = 0, lost_outside = 0;
+    void add(const Counters& o);
+};
+
+Settings settings_from(const ParamSet& p);
+MethodInfo caustic_mapping_info();
+std::unique_ptr<Method> make_caustic_mapping(const ParamSet& p);
+
+}  // namespace caustics::caustic_mapping

@@ -1,0 +1,89 @@
+// caustic_mapping: the parameter table (every option with its one-line doc) and the registration.
+#include <memory>
+#include <string>
+
+#include "caustic_mapping.hpp"
+#include "registry.hpp"
+
+namespace caustics::caustic_mapping {
+
+Settings settings_from(const ParamSet& p) {
+    Settings s;
+    s.grid = static_cast<int>(p.get_int("grid"));
+    s.map = static_cast<int>(p.get_int("map"));
+    s.estimator.kind = p.get_enum("estimator") == "newton" ? EstimatorKind::Newton : EstimatorKind::Approx;
+    s.estimator.iterations = static_cast<int>(p.get_int("iterations"));
+    s.estimator.d0 = p.get_float("d0");
+    s.estimator.eps = p.get_float("eps");
+    s.estimator.safeguard = p.get_enum("safeguard") == "bisection" ? Safeguard::Bisection : Safeguard::None;
+    s.estimator.tolerance = p.get_float("tolerance");
+    s.estimator.bisection_steps = static_cast<int>(p.get_int("bisection_steps"));
+    s.flux = p.get_enum("flux_weight") == "paper" ? FluxWeight::Paper : FluxWeight::Radiometric;
+    s.splat = p.get_enum("splat") == "point" ? SplatKernel::Point : SplatKernel::Gaussian;
+    s.adaptive = p.get_enum("splat") == "adaptive";
+    s.splat_radius = p.get_float("splat_radius");
+    s.lowpass = p.get_float("lowpass");
+    const std::string& cube = p.get_enum("cube_map");
+    s.cube = cube == "on" ? CubeMode::On : cube == "off" ? CubeMode::Off : CubeMode::Auto;
+    s.bilinear = p.get_enum("filter") == "bilinear";
+    s.extend = static_cast<int>(p.get_int("extend"));
+    s.bin_samples = static_cast<int>(p.get_int("bin_samples"));
+    s.absorption = p.get_bool("absorption");
+    s.depth_bias = p.get_float("depth_bias");
+    s.debug_maps = p.get_bool("debug_maps");
+    return s;
+}
+
+MethodInfo caustic_mapping_info() {
+    MethodInfo info;
+    info.name = "caustic_mapping";
+    info.doc =
+        "Caustics mapping (Shah, Konttinen, Pattanaik 2007): light-space positions textures of the receivers and "
+        "of the specular objects (one grid vertex per texel), per-vertex refraction (double surface for closed "
+        "dielectrics via a back-face texture, single surface for water, one reflection for mirrors), image-space "
+        "intersection estimation (the paper's approximate iteration or Newton-Raphson, optional bisection "
+        "safeguard), splats into a caustic map, shadow-map style lookup. Directional and point lights (cube map "
+        "when the receivers leave one frustum), spheres, meshes, boxes, height fields, mirrors; Fresnel on the "
+        "transmitted path. Not supported: several lights, dispersion, participating media, light through more "
+        "than one specular object, internal reflections (total internal reflection loses the ray), reflected "
+        "parts of dielectrics.";
+    info.radiometric = true;
+    info.params = {
+        {"grid", ParamType::Int, "128", 2, 4096, {}, "refractive vertex grid: specular positions/normals texture resolution (grid x grid)"},
+        {"iterations", ParamType::Int, "3", 1, 1000, {}, "estimator iterations (updates of the distance d) per ray"},
+        {"map", ParamType::Int, "768", 4, 8192, {}, "caustic-map and receiver positions texture resolution (map x map per face)"},
+        {"estimator", ParamType::Enum, "approx", 0, 0, {"approx", "newton"},
+         "approx: d <- |lookup(v + d r) - v| (Sec. III.C-D); newton: Newton-Raphson with a forward difference (appendix)"},
+        {"d0", ParamType::Float, "0", 0.0, 1e6, {},
+         "initial distance along the ray [m]; 0: start at the vertex (first lookup on its own light ray); paper: 1"},
+        {"eps", ParamType::Float, "0.01", 1e-9, 10.0, {}, "Newton forward-difference step [m] (paper: 0.1)"},
+        {"safeguard", ParamType::Enum, "bisection", 0, 0, {"none", "bisection"},
+         "bisection: when the last two estimates oscillate around the surface, bisect that bracket (Sec. III.D)"},
+        {"tolerance", ParamType::Float, "1e-4", 0.0, 1.0, {}, "convergence: |d_{k+1} - d_k| below this [m] stops early"},
+        {"bisection_steps", ParamType::Int, "8", 1, 64, {}, "minimum bisection steps once the safeguard engages"},
+        {"flux_weight", ParamType::Enum, "radiometric", 0, 0, {"radiometric", "paper"},
+         "radiometric: E0 x texel area (I x solid angle) per vertex; paper: Eq. 6 (N.L)/V times the total flux"},
+        {"splat", ParamType::Enum, "gaussian", 0, 0, {"point", "gaussian", "adaptive"},
+         "point: one texel per vertex; gaussian: normalised (flux-conserving) Gaussian footprint; adaptive: "
+         "Gaussian sized by the spacing of neighbouring vertices' landing points (not in the paper)"},
+        {"splat_radius", ParamType::Float, "0", 0.0, 100.0, {},
+         "Gaussian support in caustic-map texels (sigma = radius/3.5); 0: auto, 2.5 grid spacings"},
+        {"lowpass", ParamType::Float, "0", 0.0, 64.0, {}, "flux-conserving Gaussian low-pass radius of the caustic map in texels; 0: off"},
+        {"cube_map", ParamType::Enum, "auto", 0, 0, {"auto", "off", "on"},
+         "point lights: six-face cube map for receivers (auto: when one frustum would exceed 60 degrees off-axis; off: one frustum clamped at 80)"},
+        {"extend", ParamType::Int, "32", 0, 1024, {},
+         "extrapolate the receivers' positions texture this many texels (at most map/8) past their edges (0: the paper's null value at edges)"},
+        {"bin_samples", ParamType::Int, "1", 1, 16, {},
+         "receiver map: n x n caustic-map lookups averaged per bin (1: the bin centre)"},
+        {"filter", ParamType::Enum, "bilinear", 0, 0, {"bilinear", "nearest"}, "positions texture lookups: bilinear or nearest texel"},
+        {"absorption", ParamType::Bool, "true", 0, 0, {}, "Beer-Lambert absorption (Eq. 7) inside dielectrics / in the water"},
+        {"depth_bias", ParamType::Float, "1.0", 0.0, 100.0, {}, "scale of the receiver lookup's slope-scaled depth bias (about two texels)"},
+        {"debug_maps", ParamType::Bool, "false", 0, 0, {}, "also output the caustic map (face 0, flux per texel) as a debug image"},
+    };
+    info.create = make_caustic_mapping;
+    return info;
+}
+
+CAUSTICS_REGISTER_METHOD(caustic_mapping_info);
+
+}  // namespace caustics::caustic_mapping

@@ -1,0 +1,138 @@
+#pragma once
+// A positions texture seen from the light (Shah et al. 2007, Sec. III.B): one face (orthographic or
+// perspective) or six cube faces, each a G-buffer of world positions, normals and depths. fetch() is the
+// shader's tex2D(posTexture, getTC(mVP, p)): p is projected into the light view and the stored surface
+// point is read back, bilinearly between four covered texels (nearest when a neighbour is empty);
+// false is the paper's "null value" (no geometry seen in that direction, or outside the frustum).
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include <glm/glm.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "gbuffer_raster.hpp"
+#include "light_projection.hpp"
+
+namespace caustics::caustic_mapping {
+
+struct Texel {
+    int face = 0;
+    double px = 0, py = 0, depth = 0;
+};
+
+// id of texels filled by extend_positions (extrapolated, not a real receiver).
+constexpr std::int32_t kExtended = -2;
+
+// Extends the stored surfaces by up to `texels` texels beyond their outermost texels in each row, then
+// in each column (linear extrapolation of position and depth from the two outermost covered texels):
+// estimates near a receiver's edge then step over the edge instead of hitting the null value. Holes
+// between receivers are left empty. The new texels get id kExtended. Not in the paper (where such
+// splats are lost, Sec. III.D); extend=0 restores that behaviour.
+inline void extend_positions(GBuffer& g, int texels) {
+    if (texels <= 0) return;
+    const int W = g.width, H = g.height;
+    auto fill = [&](std::size_t dst, std::size_t edge, std::size_t inner, float t) {
+        g.position[dst] = g.position[edge] + t * (g.position[edge] - g.position[inner]);
+        g.depth[dst] = g.depth[edge] + t * (g.depth[edge] - g.depth[inner]);
+        if (!g.normal.empty()) g.normal[dst] = g.normal[edge];
+        g.id[dst] = kExtended;
+    };
+    // Extends line l (len texels, index(l, k)) whose outermost covered texels are a <= b.
+    auto extend_line = [&](int len, int a, int b, auto index) {
+        if (a < 0) return;
+        const std::size_t ea = index(a), ia = index(a + 1 <= b ? a + 1 : a);
+        for (int k = a - 1; k >= std::max(0, a - texels); --k) fill(index(k), ea, ia, static_cast<float>(a - k));
+        const std::size_t eb = index(b), ib = index(b - 1 >= a ? b - 1 : b);
+        for (int k = b + 1; k <= std::min(len - 1, b + texels); ++k) fill(index(k), eb, ib, static_cast<float>(k - b));
+    };
+    tbb::parallel_for(tbb::blocked_range<int>(0, H, 16), [&](const tbb::blocked_range<int>& r) {
+        for (int y = r.begin(); y != r.end(); ++y) {
+            const std::int32_t* id = &g.id[g.index(0, y)];
+            int a = 0, b = W - 1;
+            while (a < W && id[a] == -1) ++a;
+            if (a == W) continue;
+            while (id[b] == -1) --b;
+            extend_line(W, a, b, [&](int k) { return g.index(k, y); });
+        }
+    });
+    // Columns: outermost covered rows per column from a row-major sweep over blocks of columns.
+    constexpr int kBlock = 64;
+    tbb::parallel_for(tbb::blocked_range<int>(0, (W + kBlock - 1) / kBlock, 1), [&](const tbb::blocked_range<int>& r) {
+        int first[kBlock], last[kBlock];
+        for (int blk = r.begin(); blk != r.end(); ++blk) {
+            const int x0 = blk * kBlock, x1 = std::min(W, x0 + kBlock);
+            std::fill(first, first + kBlock, -1);
+            std::fill(last, last + kBlock, -1);
+            for (int y = 0; y < H; ++y) {
+                const std::int32_t* id = &g.id[g.index(0, y)];
+                for (int x = x0; x < x1; ++x)
+                    if (id[x] != -1) {
+                        if (first[x - x0] < 0) first[x - x0] = y;
+                        last[x - x0] = y;
+                    }
+            }
+            for (int x = x0; x < x1; ++x)
+                extend_line(H, first[x - x0], last[x - x0], [&](int k) { return g.index(x, k); });
+        }
+    });
+}
+
+struct PositionsTexture {
+    std::vector<LightProjection> faces;
+    std::vector<GBuffer> maps;
+    bool cube = false;
+    bool bilinear = true;
+
+    bool locate(const glm::dvec3& p, Texel& t) const {
+        t.face = cube ? cube_face_of(p - faces[0].eye) : 0;
+        const LightProjection& f = faces[static_cast<std::size_t>(t.face)];
+        if (!f.project(p, t.px, t.py, t.depth)) return false;
+        if (!(t.px >= 0.0 && t.py >= 0.0 && t.px <= f.width && t.py <= f.height)) return false;
+        return true;
+    }
+    // Stored surface point (and normal) along the light ray through p. false: the null value.
+    bool fetch(const glm::dvec3& p, glm::dvec3& q, glm::dvec3* normal = nullptr, Texel* where = nullptr) const {
+        Texel t;
+        if (!locate(p, t)) return false;
+        if (where) *where = t;
+        const GBuffer& g = maps[static_cast<std::size_t>(t.face)];
+        const double fx = t.px - 0.5, fy = t.py - 0.5;
+        if (bilinear) {
+            const int x0 = static_cast<int>(std::floor(fx)), y0 = static_cast<int>(std::floor(fy));
+            if (x0 >= 0 && y0 >= 0 && x0 + 1 < g.width && y0 + 1 < g.height) {
+                const std::size_t i00 = g.index(x0, y0), i10 = i00 + 1, i01 = i00 + g.width, i11 = i01 + 1;
+                if (g.id[i00] != -1 && g.id[i10] != -1 && g.id[i01] != -1 && g.id[i11] != -1) {
+                    const double ax = fx - x0, ay = fy - y0;
+                    const double w00 = (1 - ax) * (1 - ay), w10 = ax * (1 - ay), w01 = (1 - ax) * ay, w11 = ax * ay;
+                    q = w00 * glm::dvec3(g.position[i00]) + w10 * glm::dvec3(g.position[i10]) +
+                        w01 * glm::dvec3(g.position[i01]) + w11 * glm::dvec3(g.position[i11]);
+                    if (normal) {
+                        const glm::dvec3 n = w00 * glm::dvec3(g.normal[i00]) + w10 * glm::dvec3(g.normal[i10]) +
+                                             w01 * glm::dvec3(g.normal[i01]) + w11 * glm::dvec3(g.normal[i11]);
+                        const double len = glm::length(n);
+                        *normal = len > 0.0 ? n / len : glm::dvec3(g.normal[i00]);
+                    }
+                    return true;
+                }
+            }
+        }
+        const int x = std::clamp(static_cast<int>(std::floor(t.px)), 0, g.width - 1);
+        const int y = std::clamp(static_cast<int>(std::floor(t.py)), 0, g.height - 1);
+        const std::size_t i = g.index(x, y);
+        if (g.id[i] == -1) return false;
+        q = glm::dvec3(g.position[i]);
+        if (normal) *normal = glm::dvec3(g.normal[i]);
+        return true;
+    }
+    // Light-view depth of p (in the face that holds it): the sign of depth(p) - depth(fetch(p)) says on
+    // which side of the stored surface p lies (> 0: behind it, seen from the light).
+    double depth(const glm::dvec3& p) const {
+        const int face = cube ? cube_face_of(p - faces[0].eye) : 0;
+        const LightProjection& f = faces[static_cast<std::size_t>(face)];
+        return f.type == ProjectionType::Perspective ? glm::length(p - f.eye) : f.view(p).z;
+    }
+};
+
+}  // namespace caustics::caustic_mapping
