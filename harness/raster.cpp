@@ -12,10 +12,13 @@ namespace caustics {
 namespace {
 
 constexpr std::size_t kChunk = 4096;    // triangles per binning work item (fixed: keeps output order)
+constexpr int kGridChunkRows = 8;       // grid path: vertex rows per binning work item (fixed)
 constexpr int kMaxCopies = 9;           // wrap: a triangle may touch at most 3 x 3 image tiles
 constexpr int kSubpixelBits = 8;        // PixelCenter: fixed-point vertex snapping (1/256 pixel)
 constexpr double kSubpixel = 1 << kSubpixelBits;
 constexpr double kMaxFixedCoordinate = 1 << 22;  // pixels; keeps edge functions well inside int64
+
+constexpr int kRows = TriangleRaster::kBandRows;   // Area: band accumulators are column-major
 
 enum TriangleKind : std::uint8_t { kSkip = 0, kNormal = 1, kOnePixel = 2, kDegenerate = 3 };
 
@@ -64,7 +67,7 @@ inline void accumulate_line(double* acc, std::size_t stride, int row0, int row1,
     const double dxdy = (x1 - x0) / (y1 - y0);
     const double slope = dxdy != 0.0 ? sign / std::abs(dxdy) : 0.0;
     int row = static_cast<int>(ytop);   // ytop >= row0 >= 0: truncation is floor
-    double* a = acc + static_cast<std::size_t>(row - row0) * stride;
+    double* a = acc + (row - row0);   // transposed band: column i of this row at a[i * kRows]
     double ya = ytop;
     double xa = x0 + (ya - y0) * dxdy;
     while (ya < ybot) {
@@ -77,26 +80,26 @@ inline void accumulate_line(double* acc, std::size_t stride, int row0, int row1,
         if (xr <= i0 + 1.0) {
             // Within one pixel column: the part right of the mean x stays in column i0.
             const double xm = 0.5 * (xl + xr) - i0;
-            a[i0] += d - d * xm;
-            a[i0 + 1] += d * xm;
+            a[i0 * kRows] += d - d * xm;
+            a[(i0 + 1) * kRows] += d * xm;
         } else {
-            const int i1 = static_cast<int>(std::ceil(xr)) - 1;
+            const int i1 = static_cast<int>(xr) - (static_cast<int>(xr) == xr ? 1 : 0);   // ceil(xr) - 1, xr >= 0
             double previous = slope * (0.5 * (i0 + 1.0 - xl) * (i0 + 1.0 - xl));   // phi(c - xr) = 0 here
-            a[i0] += previous;
+            a[i0 * kRows] += previous;
             for (int i = i0 + 1; i < i1; ++i) {   // fully crossed columns: phi(c - xl) = c - xl - 1/2
                 const double cover = slope * (i + 0.5 - xl);
-                a[i] += cover - previous;
+                a[i * kRows] += cover - previous;
                 previous = cover;
             }
             const double c = i1 + 1.0;
             const double cover = slope * (phi(c - xl) - phi(c - xr));
-            a[i1] += cover - previous;
-            a[i1 + 1] += d - cover;
+            a[i1 * kRows] += cover - previous;
+            a[(i1 + 1) * kRows] += d - cover;
         }
         xa = xb;
         ya = yb;
         ++row;
-        a += stride;
+        ++a;
     }
 }
 
@@ -148,9 +151,101 @@ struct TriangleRaster::Impl {
     std::vector<BinEntry> entries;
     std::vector<RasterStats> chunk_stats;
     tbb::enumerable_thread_specific<std::vector<double>> band_acc;
+    // Structured-grid path (Area coverage, no wrap): see draw_grid_bins.
+    std::vector<double> tri_weight;          // per triangle: -value / signed area (0: draws no edges)
+    std::vector<std::uint8_t> chunk_grid;    // per chunk: its triangles follow the grid pattern
+    std::vector<double> edge_weight;         // per edge slot 3 v + type
+    std::vector<glm::ivec2> edge_band;       // per edge slot: band range (x > y: none)
+    std::vector<std::uint32_t> grid_entries; // (id << 2) | type; type 3: point-deposit triangle id
 
     int width = 0, height = 0, bands = 0;
     bool wrap = false;
+
+    // Grid path: edge slot 3 v + type joins vertex v to v + 1 (type 0), v + g (1), v + g + 1 (2), drawn
+    // in that direction with the weight of the triangle traversing it so minus the one traversing it
+    // backwards; point-deposit triangles are listed with type 3. Fills band_start and grid_entries in a
+    // fixed order (vertex rows in chunks of kGridChunkRows), whatever the thread count.
+    void bin_grid(std::span<const glm::vec2> pos, int g) {
+        const std::size_t nb = static_cast<std::size_t>(bands);
+        const int chunks = (g + kGridChunkRows - 1) / kGridChunkRows;
+        edge_weight.resize(3 * pos.size());
+        edge_band.resize(3 * pos.size());
+        counts.assign(static_cast<std::size_t>(chunks) * nb, 0u);
+        cursors.resize(counts.size());
+        const float fw = static_cast<float>(width), fh = static_cast<float>(height);
+        const int last_row = height - 1;
+        auto band_of = [&](float ya, float yb, glm::ivec2& r) {
+            const float lo = std::min(ya, yb), hi = std::max(ya, yb);
+            if (!(hi > 0.0f && lo < fh && lo != hi)) {
+                r = {1, 0};
+                return;
+            }
+            r.x = static_cast<int>(std::max(lo, 0.0f)) / kBandRows;
+            r.y = std::min(static_cast<int>(hi), last_row) / kBandRows;
+        };
+        tbb::parallel_for(0, chunks, [&](int c) {
+            std::uint32_t* count = counts.data() + static_cast<std::size_t>(c) * nb;
+            const int j1 = std::min(g, (c + 1) * kGridChunkRows);
+            for (int j = c * kGridChunkRows; j < j1; ++j) {
+                for (int i = 0; i < g; ++i) {
+                    const std::size_t v = static_cast<std::size_t>(j) * g + i;
+                    const std::size_t tA = 2 * (static_cast<std::size_t>(j) * (g - 1) + i), tB = tA + 1;
+                    const std::size_t left = tA - 2, below = tA - 2 * static_cast<std::size_t>(g - 1) + 1;
+                    const bool in_i = i + 1 < g, in_j = j + 1 < g;
+                    double w[3];
+                    w[0] = in_i ? (in_j ? tri_weight[tA] : 0.0) - (j > 0 ? tri_weight[below] : 0.0) : 0.0;
+                    w[1] = in_j ? (i > 0 ? tri_weight[left] : 0.0) - (in_i ? tri_weight[tB] : 0.0) : 0.0;
+                    w[2] = in_i && in_j ? tri_weight[tB] - tri_weight[tA] : 0.0;
+                    const std::size_t other[3] = {v + 1, v + g, v + g + 1};
+                    for (int type = 0; type < 3; ++type) {
+                        glm::ivec2& r = edge_band[3 * v + type];
+                        edge_weight[3 * v + type] = w[type];
+                        r = {1, 0};
+                        if (w[type] == 0.0) continue;
+                        const glm::vec2 a = pos[v], b = pos[other[type]];
+                        if (std::min(a.x, b.x) >= fw) continue;   // deposits right of the image only
+                        band_of(a.y, b.y, r);
+                        for (int band = r.x; band <= r.y; ++band) ++count[band];
+                    }
+                    if (in_i && in_j)
+                        for (std::size_t t : {tA, tB})
+                            if (kinds[t] == kOnePixel || kinds[t] == kDegenerate)
+                                for (int band = band_range[t].x; band <= band_range[t].y; ++band) ++count[band];
+                }
+            }
+        });
+        std::uint32_t running = 0;
+        for (std::size_t b = 0; b < nb; ++b) {
+            band_start[b] = running;
+            for (int c = 0; c < chunks; ++c) {
+                cursors[static_cast<std::size_t>(c) * nb + b] = running;
+                running += counts[static_cast<std::size_t>(c) * nb + b];
+            }
+        }
+        band_start[nb] = running;
+        grid_entries.resize(running);
+        tbb::parallel_for(0, chunks, [&](int c) {
+            std::uint32_t* cursor = cursors.data() + static_cast<std::size_t>(c) * nb;
+            const int j1 = std::min(g, (c + 1) * kGridChunkRows);
+            for (int j = c * kGridChunkRows; j < j1; ++j) {
+                for (int i = 0; i < g; ++i) {
+                    const std::size_t v = static_cast<std::size_t>(j) * g + i;
+                    for (int type = 0; type < 3; ++type) {
+                        const glm::ivec2 r = edge_band[3 * v + type];
+                        const std::uint32_t code = static_cast<std::uint32_t>(v << 2) | static_cast<std::uint32_t>(type);
+                        for (int band = r.x; band <= r.y; ++band) grid_entries[cursor[band]++] = code;
+                    }
+                    if (i + 1 < g && j + 1 < g) {
+                        const std::size_t tA = 2 * (static_cast<std::size_t>(j) * (g - 1) + i);
+                        for (std::size_t t : {tA, tA + 1})
+                            if (kinds[t] == kOnePixel || kinds[t] == kDegenerate)
+                                for (int band = band_range[t].x; band <= band_range[t].y; ++band)
+                                    grid_entries[cursor[band]++] = static_cast<std::uint32_t>(t << 2) | 3u;
+                    }
+                }
+            }
+        });
+    }
 
     // Calls fn(sx, sy, band_lo, band_hi) for every copy of a triangle with bounding box b.
     template <class Fn>
@@ -217,26 +312,63 @@ RasterStats TriangleRaster::draw(const RasterTriangles& batch, const RasterOptio
     const auto& tris = batch.triangles;
     const std::size_t npos = pos.size();
 
+    // A structured grid (g x g vertices, cells (i, j) split into {v00, v10, v11}, {v00, v11, v01}, as the
+    // surface grids of caustic_triangles): in Area mode without wrap every interior edge is shared by two
+    // triangles, so it is drawn once with the difference of their weights (half the edge work).
+    int grid_g = 0;
+    if (area && !m.wrap && ntri > 0) {
+        const auto g = static_cast<std::size_t>(std::llround(std::sqrt(static_cast<double>(npos))));
+        if (g >= 2 && g * g == npos && ntri == 2 * (g - 1) * (g - 1) && g < (std::size_t{1} << 14))
+            grid_g = static_cast<int>(g);
+    }
+    m.tri_weight.resize(area ? ntri : 0);
+    m.chunk_grid.assign(chunks, grid_g > 0 ? 1 : 0);
+
     // Pass 1: classify, bound and count the band entries of every triangle copy (per chunk).
     tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
         RasterStats& st = m.chunk_stats[c];
         std::uint32_t* count = m.counts.data() + c * bands;
         const std::size_t end = std::min(ntri, (c + 1) * kChunk);
+        if (grid_g > 0) {   // the chunk starts on an even triangle: cell c * kChunk / 2
+            const unsigned g = static_cast<unsigned>(grid_g);
+            const std::size_t cell0 = c * kChunk / 2;
+            unsigned i = static_cast<unsigned>(cell0 % (g - 1)), j = static_cast<unsigned>(cell0 / (g - 1));
+            bool ok = true;
+            for (std::size_t t = c * kChunk; t < end && ok; t += 2) {
+                const unsigned v00 = j * g + i, v10 = v00 + 1, v01 = v00 + g, v11 = v01 + 1;
+                ok = tris[t] == glm::uvec3(v00, v10, v11) && tris[t + 1] == glm::uvec3(v00, v11, v01);
+                if (++i == g - 1) {
+                    i = 0;
+                    ++j;
+                }
+            }
+            m.chunk_grid[c] = ok ? 1 : 0;
+        }
+        // Local pointers: the byte stores to kinds would otherwise make every vector reload its data.
+        std::uint8_t* const kinds = m.kinds.data();
+        double* const tri_weight = m.tri_weight.data();
+        Box* const boxes = m.boxes.data();
+        glm::ivec2* const band_range = m.band_range.data();
+        const glm::vec2* const P = pos.data();
+        const float* const values = batch.triangle_values.data();
+        const bool count_bands = grid_g == 0;   // grid: the edges are binned instead (bin_grid)
+        RasterStats local;
         for (std::size_t t = c * kChunk; t < end; ++t) {
-            m.kinds[t] = kSkip;
+            kinds[t] = kSkip;
+            if (area) tri_weight[t] = 0.0;
             const glm::uvec3 tri = tris[t];
-            const float value = batch.triangle_values[t];
+            const float value = values[t];
             if (!interpolate && value == 0.0f) continue;
             if (tri.x >= npos || tri.y >= npos || tri.z >= npos)
                 throw std::invalid_argument("TriangleRaster::draw: triangle index out of range");
-            const glm::vec2 p0 = pos[tri.x], p1 = pos[tri.y], p2 = pos[tri.z];
+            const glm::vec2 p0 = P[tri.x], p1 = P[tri.y], p2 = P[tri.z];
             bool finite = std::isfinite(value) && std::isfinite(p0.x) && std::isfinite(p0.y) &&
                           std::isfinite(p1.x) && std::isfinite(p1.y) && std::isfinite(p2.x) && std::isfinite(p2.y);
             if (finite && interpolate)
                 finite = std::isfinite(batch.vertex_values[tri.x]) && std::isfinite(batch.vertex_values[tri.y]) &&
                          std::isfinite(batch.vertex_values[tri.z]);
             if (!finite) {
-                ++st.nonfinite;
+                ++local.nonfinite;
                 continue;
             }
             const Box b{std::min({p0.x, p1.x, p2.x}), std::min({p0.y, p1.y, p2.y}),
@@ -255,27 +387,50 @@ RasterStats TriangleRaster::draw(const RasterTriangles& batch, const RasterOptio
                 }
             } else if (std::max({std::abs(b.xmin), std::abs(b.xmax), std::abs(b.ymin), std::abs(b.ymax)}) >
                        kMaxFixedCoordinate) {
-                ++st.too_large;
+                ++local.too_large;
                 continue;
             }
             const int copies = m.for_each_copy(b, [&](int, int, int lo, int hi) {
-                for (int band = lo; band <= hi; ++band) ++count[band];
-                if (!m.wrap) m.band_range[t] = {lo, hi};
+                if (count_bands)
+                    for (int band = lo; band <= hi; ++band) ++count[band];
+                if (!m.wrap) band_range[t] = {lo, hi};
             });
             if (copies < 0) {
-                ++st.too_large;
+                ++local.too_large;
                 continue;
             }
             if (copies == 0) continue;
-            m.boxes[t] = b;
-            m.kinds[t] = kind;
-            st.drawn += copies;
-            if (kind == kOnePixel || kind == kDegenerate) ++st.point_deposits;
+            boxes[t] = b;
+            kinds[t] = kind;
+            if (area && kind == kNormal) {
+                // Coverage accumulates with the sign of -(signed area): weight = value / coverage. Wrap
+                // copies are shifted by whole tiles, which leaves the (exact) differences unchanged.
+                const glm::dvec2 q0(p0), q1(p1), q2(p2);
+                const double signed_area = 0.5 * ((q1.x - q0.x) * (q2.y - q0.y) - (q1.y - q0.y) * (q2.x - q0.x));
+                tri_weight[t] = -static_cast<double>(value) / signed_area;
+            }
+            local.drawn += copies;
+            if (kind == kOnePixel || kind == kDegenerate) ++local.point_deposits;
         }
+        st = local;
     });
+
+    const bool grid = grid_g > 0 && std::all_of(m.chunk_grid.begin(), m.chunk_grid.end(), [](std::uint8_t f) { return f != 0; });
+    if (grid) {
+        m.bin_grid(pos, grid_g);
+    } else if (grid_g > 0) {   // not a grid after all: count the band entries pass 1 skipped
+        tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
+            std::uint32_t* count = m.counts.data() + c * bands;
+            const std::size_t end = std::min(ntri, (c + 1) * kChunk);
+            for (std::size_t t = c * kChunk; t < end; ++t)
+                if (m.kinds[t] != kSkip)
+                    for (int band = m.band_range[t].x; band <= m.band_range[t].y; ++band) ++count[band];
+        });
+    }
 
     // Entry offsets: band-major, chunk-minor, so each band lists its triangles in input order.
     std::uint32_t running = 0;
+    if (!grid) {
     for (std::size_t b = 0; b < bands; ++b) {
         m.band_start[b] = running;
         for (std::size_t c = 0; c < chunks; ++c) {
@@ -304,6 +459,7 @@ RasterStats TriangleRaster::draw(const RasterTriangles& batch, const RasterOptio
             });
         }
     });
+    }
 
     // Pass 3: draw band by band (each band owns its rows of the target).
     const int W = m.width, H = m.height;
@@ -311,19 +467,40 @@ RasterStats TriangleRaster::draw(const RasterTriangles& batch, const RasterOptio
     tbb::parallel_for(tbb::blocked_range<int>(0, m.bands, 1), [&](const tbb::blocked_range<int>& range) {
         for (int band = range.begin(); band != range.end(); ++band) {
             const int row0 = band * kBandRows, row1 = std::min(H, row0 + kBandRows);
-            const BinEntry* first = m.entries.data() + m.band_start[band];
-            const BinEntry* last = m.entries.data() + m.band_start[band + 1];
+            const BinEntry* first = grid ? nullptr : m.entries.data() + m.band_start[band];
+            const BinEntry* last = grid ? nullptr : m.entries.data() + m.band_start[band + 1];
             if (area) {
                 std::vector<double>& acc = m.band_acc.local();
                 if (acc.size() < stride * kBandRows) acc.assign(stride * kBandRows, 0.0);
                 auto deposit = [&](double x, double y, double value) {
                     const double fx = std::floor(x), fy = std::floor(y);
                     if (fx < 0.0 || fx >= W || fy < row0 || fy >= row1) return;
-                    double* a = acc.data() + static_cast<std::size_t>(fy - row0) * stride + static_cast<std::size_t>(fx);
+                    double* a = acc.data() + static_cast<std::size_t>(fy - row0) + static_cast<std::size_t>(fx) * kRows;
                     a[0] += value;
-                    a[1] -= value;
+                    a[kRows] -= value;
                 };
-                for (const BinEntry* e = first; e != last; ++e) {
+                if (grid) {
+                    const std::uint32_t g = static_cast<std::uint32_t>(grid_g);
+                    const std::uint32_t step[3] = {1u, g, g + 1u};
+                    const std::uint32_t* ge = m.grid_entries.data();
+                    for (std::uint32_t k = m.band_start[band], kend = m.band_start[band + 1]; k != kend; ++k) {
+                        const std::uint32_t code = ge[k], type = code & 3u, id = code >> 2;
+                        if (type != 3u) {
+                            accumulate_edge(acc.data(), stride, row0, row1, W, glm::dvec2(pos[id]),
+                                            glm::dvec2(pos[id + step[type]]), m.edge_weight[3 * std::size_t{id} + type]);
+                            continue;
+                        }
+                        const glm::uvec3 tri = tris[id];
+                        const double value = batch.triangle_values[id];
+                        if (m.kinds[id] == kOnePixel) {
+                            const Box& b = m.boxes[id];
+                            deposit(b.xmin, b.ymin, value);
+                        } else {
+                            for (unsigned vi : {tri.x, tri.y, tri.z}) deposit(pos[vi].x, pos[vi].y, value / 3.0);
+                        }
+                    }
+                }
+                for (const BinEntry* e = first; e != last && !grid; ++e) {
                     const glm::uvec3 tri = tris[e->triangle];
                     const glm::dvec2 shift(static_cast<double>(e->sx) * W, static_cast<double>(e->sy) * H);
                     const glm::dvec2 p0 = glm::dvec2(pos[tri.x]) + shift, p1 = glm::dvec2(pos[tri.y]) + shift,
@@ -336,33 +513,31 @@ RasterStats TriangleRaster::draw(const RasterTriangles& batch, const RasterOptio
                     } else if (kind == kDegenerate) {
                         for (const glm::dvec2& p : {p0, p1, p2}) deposit(p.x, p.y, value / 3.0);
                     } else {
-                        // Coverage accumulates with the sign of -(signed area): weight = value / coverage.
-                        const double signed_area = 0.5 * ((p1.x - p0.x) * (p2.y - p0.y) - (p1.y - p0.y) * (p2.x - p0.x));
-                        const double weight = -value / signed_area;
+                        const double weight = m.tri_weight[e->triangle];
                         accumulate_edge(acc.data(), stride, row0, row1, W, p0, p1, weight);
                         accumulate_edge(acc.data(), stride, row0, row1, W, p1, p2, weight);
                         accumulate_edge(acc.data(), stride, row0, row1, W, p2, p0, weight);
                     }
                 }
-                for (int row = row0; row < row1; ++row) {
-                    double* a = acc.data() + static_cast<std::size_t>(row - row0) * stride;
-                    float* out = target.pixels.data() + static_cast<std::size_t>(row) * W;
-                    double run = 0.0;
-                    if (options.accumulate) {
-                        for (int x = 0; x < W; ++x) {
-                            run += a[x];
-                            a[x] = 0.0;
-                            out[x] += static_cast<float>(run);
-                        }
-                    } else {
-                        for (int x = 0; x < W; ++x) {
-                            run += a[x];
-                            a[x] = 0.0;
-                            out[x] = static_cast<float>(run);
-                        }
+                // Prefix sums along the rows, all rows of the band at once (column-major: vectorises).
+                const int nrows = row1 - row0;
+                float* out = target.pixels.data() + static_cast<std::size_t>(row0) * W;
+                double run[kRows] = {};
+                double* a = acc.data();
+                for (int x = 0; x < W; ++x, a += kRows) {
+                    float col[kRows];
+                    for (int r = 0; r < kRows; ++r) {
+                        run[r] += a[r];
+                        a[r] = 0.0;
+                        col[r] = static_cast<float>(run[r]);
                     }
-                    a[W] = a[W + 1] = 0.0;
+                    if (options.accumulate) {
+                        for (int r = 0; r < nrows; ++r) out[static_cast<std::size_t>(r) * W + x] += col[r];
+                    } else {
+                        for (int r = 0; r < nrows; ++r) out[static_cast<std::size_t>(r) * W + x] = col[r];
+                    }
                 }
+                std::fill(a, a + 2 * kRows, 0.0);
                 continue;
             }
 

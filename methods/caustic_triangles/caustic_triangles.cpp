@@ -193,14 +193,13 @@ void CausticTriangles::compute_triangle_flux(const glm::dvec3& light_dir, double
         for (int j = rows.begin(); j != rows.end(); ++j) {
             for (int i = 0; i + 1 < g; ++i) {
                 const std::size_t t = 2 * (static_cast<std::size_t>(j) * (g - 1) + i);
+                // The cell's corners (ensure_topology: {v00, v10, v11}, {v00, v11, v01}).
+                const std::size_t v00 = static_cast<std::size_t>(j) * g + i, v01 = v00 + g;
+                const glm::dvec3 c00(xs_[i], ys_[j], height_[v00]), c10(xs_[i + 1], ys_[j], height_[v00 + 1]);
+                const glm::dvec3 c01(xs_[i], ys_[j + 1], height_[v01]), c11(xs_[i + 1], ys_[j + 1], height_[v01 + 1]);
+                const glm::dvec3 p[2][3] = {{c00, c10, c11}, {c00, c11, c01}};
                 for (int half = 0; half < 2; ++half) {
-                    const glm::uvec3 tri = triangles_[t + half];
-                    glm::dvec3 p[3];
-                    for (int k = 0; k < 3; ++k) {
-                        const unsigned v = tri[k];
-                        p[k] = {xs_[v % g], ys_[v / g], height_[v]};
-                    }
-                    const glm::dvec3 area_vector = 0.5 * glm::cross(p[1] - p[0], p[2] - p[0]);
+                    const glm::dvec3 area_vector = 0.5 * glm::cross(p[half][1] - p[half][0], p[half][2] - p[half][0]);
                     flux_[t + half] = static_cast<float>(e0 * std::max(0.0, -glm::dot(area_vector, light_dir)));
                 }
             }
@@ -280,7 +279,8 @@ CausticTriangles::Counters CausticTriangles::refract_vertices(const FrameGeometr
                 // A periodic target (texture tile) wraps: a point outside the tile is not lost.
                 if (!periodic_target && !(st.x >= 0.0 && st.x <= 1.0 && st.y >= 0.0 && st.y <= 1.0)) ++c.lost;
                 image_[v] = {static_cast<float>(st.x * width), static_cast<float>(st.y * height)};
-                weight_[v] = static_cast<float>(transmittance * std::exp(-absorption * t));
+                weight_[v] = static_cast<float>(absorption != 0.0 ? transmittance * std::exp(-absorption * t)
+                                                                  : transmittance);   // exp(-0) == 1
             }
         }
     });
