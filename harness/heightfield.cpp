@@ -15,7 +15,8 @@ namespace {
 
 // Grid coordinate of world coordinate x along one axis: clamped to [0, n-1], or wrapped for periodic
 // fields (vertex n-1 is vertex 0 again, so the period is n-1 cells).
-void grid_coord(double x, double origin, double spacing, int n, bool periodic, int& i0, int& i1, double& f) {
+[[gnu::always_inline]] inline void grid_coord(double x, double origin, double spacing, int n, bool periodic, int& i0,
+                                              int& i1, double& f) {
     double g = (x - origin) / spacing;
     const int cells = n - 1;
     if (cells <= 0) {
@@ -30,7 +31,8 @@ void grid_coord(double x, double origin, double spacing, int n, bool periodic, i
     } else {
         g = std::clamp(g, 0.0, static_cast<double>(cells));
     }
-    i0 = std::min(static_cast<int>(std::floor(g)), cells - 1);
+    // g >= 0 here (NaN aside), so truncation is floor, without a libm call.
+    i0 = std::min(static_cast<int>(g), cells - 1);
     f = g - i0;
     i1 = i0 + 1;
 }

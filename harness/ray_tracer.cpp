@@ -115,6 +115,7 @@ struct RayTracer::Impl {
     };
     std::vector<GeometryInfo> geometries;   // by Embree geomID
     double min_tmin = 0.0;                  // self-intersection guard scaled to the scene size
+    double ng_sign = 1.0;                   // embree_ng_sign(), cached
 
     ~Impl() {
         if (scene) rtcReleaseScene(scene);
@@ -123,7 +124,7 @@ struct RayTracer::Impl {
 
 RayTracer::RayTracer(const FrameGeometry& frame) : frame_(&frame), impl_(std::make_unique<Impl>()) {
     RTCDevice device = shared_device();
-    embree_ng_sign();
+    impl_->ng_sign = embree_ng_sign();
     check_embree("device");
     impl_->scene = rtcNewScene(device);
     // Robust mode makes shared edges watertight (tests/test_reference.cpp measures the miss rate).
@@ -204,13 +205,12 @@ Hit RayTracer::intersect(const glm::dvec3& origin, const glm::dvec3& dir, double
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(impl_->scene, &context, &rh);
 
-    Hit hit;
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return hit;
+    // Hit is built once from its final values (a default-constructed Hit would be zeroed first).
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return Hit{};
     const Impl::GeometryInfo& info = impl_->geometries[rh.hit.geomID];
     const ObjectInstance& inst = *info.instance;
-    hit.valid = true;
-    hit.object = info.object;
     double t = rh.ray.tfar;
+    glm::dvec3 position, geometric_normal, shading_normal;
 
     if (inst.analytic_sphere) {
         // Exact ray-sphere distance in double, the root nearest Embree's float answer.
@@ -229,19 +229,19 @@ Hit RayTracer::intersect(const glm::dvec3& origin, const glm::dvec3& dir, double
             const double refined = std::abs(t0 - t) < std::abs(t1 - t) ? t0 : t1;
             if (refined > 0.0) t = refined;
         }
-        hit.position = origin + t * dir;
-        hit.geometric_normal = glm::normalize(hit.position - obj.center);
-        hit.shading_normal = hit.geometric_normal;
+        position = origin + t * dir;
+        geometric_normal = glm::normalize(position - obj.center);
+        shading_normal = geometric_normal;
     } else {
         // Embree's Ng is computed from the triangle it just tested (no extra memory traffic); its sign
         // relative to our counter-clockwise-outward convention is measured once (embree_ng_sign).
         const glm::dvec3 ng(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
         const double len = glm::length(ng);
-        hit.geometric_normal = len > 0.0 ? (embree_ng_sign() / len) * ng : glm::dvec3(0.0, 0.0, 1.0);
-        hit.position = origin + t * dir;
+        geometric_normal = len > 0.0 ? (impl_->ng_sign / len) * ng : glm::dvec3(0.0, 0.0, 1.0);
+        position = origin + t * dir;
 
         if (inst.heightfield) {
-            hit.shading_normal = inst.heightfield->sample_normal(hit.position.x, hit.position.y);
+            shading_normal = inst.heightfield->sample_normal(position.x, position.y);
         } else if (!inst.mesh.normals.empty()) {
             const TriangleMesh& mesh = inst.mesh;
             const glm::uvec3 tri = mesh.triangles[rh.hit.primID];
@@ -249,15 +249,14 @@ Hit RayTracer::intersect(const glm::dvec3& origin, const glm::dvec3& dir, double
             const glm::dvec3 ns = (1.0 - u - v) * to_d(mesh.normals[tri.x]) + u * to_d(mesh.normals[tri.y]) +
                                   v * to_d(mesh.normals[tri.z]);
             const double ls = glm::length(ns);
-            hit.shading_normal = ls > 0.0 ? ns / ls : hit.geometric_normal;
+            shading_normal = ls > 0.0 ? ns / ls : geometric_normal;
         } else {
-            hit.shading_normal = hit.geometric_normal;
+            shading_normal = geometric_normal;
         }
         // Shading normals face the geometric normal's (outward) side.
-        if (glm::dot(hit.shading_normal, hit.geometric_normal) < 0.0) hit.shading_normal = -hit.shading_normal;
+        if (glm::dot(shading_normal, geometric_normal) < 0.0) shading_normal = -shading_normal;
     }
-    hit.t = t;
-    return hit;
+    return Hit{true, info.object, t, position, geometric_normal, shading_normal};
 }
 
 bool RayTracer::occluded(const glm::dvec3& origin, const glm::dvec3& dir, double tmin, double tmax) const {

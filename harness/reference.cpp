@@ -1,8 +1,9 @@
 // The reference light tracer (DESIGN.md section 5). See reference.hpp for the contract.
 //
 // Determinism: photon k draws its random numbers only from a counter-based generator keyed by
-// (seed, k, dimension); deposits are summed as 64-bit fixed-point integers (associative), and the flux
-// ledger is summed per fixed batch of photons and then over batches in batch order. The result is
+// (seed, k, dimension); deposits are summed as 64-bit fixed-point integers (associative), photons are
+// traced in a fixed order within each fixed batch (batch_order), and the flux ledger is summed per fixed
+// chunk of that order, then over chunks and batches in order. The result is
 // therefore bit-identical for any thread count and scheduling.
 //
 // Noise: photon k contributes X_k = N w_k / A to the bin it lands in (0 elsewhere); E = mean(X_k) and
@@ -14,6 +15,7 @@
 #include "reference.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -36,6 +38,8 @@ namespace caustics {
 namespace {
 
 constexpr std::uint64_t kBatchSize = 65536;
+// Photons of one batch traced as one task (and summed into one partial ledger), in the batch's order.
+constexpr std::size_t kChunkSize = 2048;
 // One photon's normalised weight (<= 1) becomes an integer of at most 2^30: 1e9 photons in one bin
 // stay below 2^60, and each contribution keeps ~2^-30 relative precision.
 constexpr double kFixedScale = 1073741824.0;  // 2^30
@@ -168,9 +172,19 @@ struct RayRecorder {
     }
 };
 
+// Per bin / pixel: {sum of q, sum of q^2 / 2^30}, interleaved so that one deposit touches one cache line.
+using FixedPair = std::array<std::int64_t, 2>;
+
 struct Accumulators {
-    std::vector<std::int64_t> bin_sum, bin_sq;   // receiver: sum of q, sum of q^2 / 2^30
-    std::vector<std::int64_t> pix_sum, pix_sq;   // camera
+    std::vector<FixedPair> bins;     // receiver
+    std::vector<FixedPair> pixels;   // camera
+};
+
+// What a camera deposit needs of one pixel, packed so that it costs one cache miss: the pixel's
+// G-buffer footprint factor (d_c^2 / cos_c) and the primary-hit object (-1 where not covered).
+struct PixelInfo {
+    double scale = 0.0;
+    int object = -1;
 };
 
 // Everything one photon needs, shared read-only by all threads.
@@ -181,6 +195,7 @@ struct Transport {
     const CameraGBuffer* gbuffer = nullptr;
     const CameraModel* camera = nullptr;
     std::vector<double> pixel_scale;   // camera: d_c^2 / cos_c of each pixel's G-buffer point
+    std::vector<PixelInfo> pixel_info; // camera: pixel_scale and G-buffer object, packed
     std::vector<Emitter> emitters;
     std::vector<std::uint64_t> photons_of_light;
     double weight_ref = 1.0;           // largest flux per photon: normalises fixed-point weights
@@ -190,16 +205,82 @@ struct Transport {
     bool fresnel = false;
     std::uint64_t seed = 1;
 
+    void batch_order(std::uint64_t first, std::uint64_t last, std::vector<std::uint32_t>& order,
+                     std::vector<std::uint32_t>& scratch) const;
     template <class Log>
     void trace(std::uint64_t k, FluxLedger& ledger, Accumulators& acc, Log& log) const;
+    // The pixel a deposit at p would land in, or -1 (outside the image or behind the camera).
+    std::ptrdiff_t camera_pixel(const glm::dvec3& p) const;
     template <class Log>
-    void deposit_camera(const Hit& hit, const glm::dvec3& dir_in, double w, Accumulators& acc, Log& log) const;
+    void deposit_camera(const Hit& hit, std::size_t index, const glm::dvec3& dir_in, double w, Accumulators& acc,
+                        Log& log) const;
 };
 
-void add_fixed(std::vector<std::int64_t>& sum, std::vector<std::int64_t>& sq, std::size_t i, double x) {
+void add_ledger(FluxLedger& sum, const FluxLedger& l) {
+    sum.emitted += l.emitted;
+    sum.deposited_receiver += l.deposited_receiver;
+    sum.deposited_other += l.deposited_other;
+    sum.direct += l.direct;
+    sum.escaped += l.escaped;
+    sum.absorbed += l.absorbed;
+    sum.truncated += l.truncated;
+}
+
+void add_fixed(FixedPair& acc, double x) {
     // x >= 0: adding 1/2 and truncating rounds to nearest, without a libm call.
-    sum[i] += static_cast<std::int64_t>(x * kFixedScale + 0.5);
-    sq[i] += static_cast<std::int64_t>(x * x * kFixedScale + 0.5);
+    acc[0] += static_cast<std::int64_t>(x * kFixedScale + 0.5);
+    acc[1] += static_cast<std::int64_t>(x * x * kFixedScale + 0.5);
+}
+
+// Interleaves the bits of two 8-bit integers (Morton / Z order).
+std::uint32_t morton2(std::uint32_t x, std::uint32_t y) {
+    auto spread = [](std::uint32_t v) {
+        v &= 0xFFu;
+        v = (v | (v << 4)) & 0x0F0Fu;
+        v = (v | (v << 2)) & 0x3333u;
+        v = (v | (v << 1)) & 0x5555u;
+        return v;
+    };
+    return spread(x) | (spread(y) << 1);
+}
+
+// The order in which the photons [first, last) of one batch are traced: grouped by light and then along
+// a Z-order curve over a 256 x 256 grid of their two emission random numbers, so that consecutive
+// photons start close together and take similar paths (coherent BVH traversal, height-field and
+// accumulator accesses). Every photon's random numbers depend only on its index, and deposits are
+// integer sums, so the order changes nothing but the round-off of the batch's flux ledger; it is a fixed
+// function of the batch (stable counting sorts), so results stay independent of the thread count.
+// `order` receives photon offsets k - first; `scratch` holds keys.
+void Transport::batch_order(std::uint64_t first, std::uint64_t last, std::vector<std::uint32_t>& order,
+                            std::vector<std::uint32_t>& scratch) const {
+    const std::size_t n = static_cast<std::size_t>(last - first);
+    constexpr std::size_t kCells = 65536;
+    std::vector<std::uint32_t>& cell = scratch;
+    cell.resize(2 * n + kCells + 1);
+    std::uint32_t* key = cell.data();
+    std::uint32_t* tmp = key + n;
+    std::uint32_t* count = tmp + n;
+    std::fill(count, count + kCells + 1, 0u);
+    for (std::size_t i = 0; i < n; ++i) {
+        PhotonRandom rng(seed, first + i);
+        const double u1 = rng.next(), u2 = rng.next();
+        key[i] = morton2(static_cast<std::uint32_t>(u1 * 256.0), static_cast<std::uint32_t>(u2 * 256.0));
+        ++count[key[i] + 1];
+    }
+    for (std::size_t c = 1; c <= kCells; ++c) count[c] += count[c - 1];
+    order.resize(n);
+    const std::uint64_t lights = emitters.size();
+    std::uint32_t* by_cell = lights > 1 ? tmp : order.data();
+    for (std::size_t i = 0; i < n; ++i) by_cell[count[key[i]]++] = static_cast<std::uint32_t>(i);
+    if (lights > 1) {   // stable second pass by light (photon k belongs to light k mod L)
+        std::vector<std::uint32_t> light_start(lights + 1, 0u);
+        for (std::size_t i = 0; i < n; ++i) ++light_start[(first + i) % lights + 1];
+        for (std::size_t l = 1; l <= lights; ++l) light_start[l] += light_start[l - 1];
+        for (std::size_t j = 0; j < n; ++j) {
+            const std::uint32_t i = by_cell[j];
+            order[light_start[(first + i) % lights]++] = i;
+        }
+    }
 }
 
 template <class Log>
@@ -238,14 +319,24 @@ void Transport::trace(std::uint64_t k, FluxLedger& ledger, Accumulators& acc, Lo
                 ledger.direct += w;
                 return;
             }
+            // The camera pixel's data is fetched first (prefetch) so that its cache misses overlap the
+            // receiver deposit's.
+            std::ptrdiff_t pixel = -1;
+            if (camera) {
+                pixel = camera_pixel(hit.position);
+                if (pixel >= 0) {
+                    __builtin_prefetch(&pixel_info[static_cast<std::size_t>(pixel)]);
+                    __builtin_prefetch(&acc.pixels[static_cast<std::size_t>(pixel)], 1);
+                }
+            }
             if (hit.object == receiver_object) {
                 ledger.deposited_receiver += w;
                 const int bin = chart->bin_of(hit.position);
-                if (bin >= 0) add_fixed(acc.bin_sum, acc.bin_sq, static_cast<std::size_t>(bin), w / weight_ref);
+                if (bin >= 0) add_fixed(acc.bins[static_cast<std::size_t>(bin)], w / weight_ref);
             } else {
                 ledger.deposited_other += w;
             }
-            if (camera) deposit_camera(hit, dir, w, acc, log);
+            if (pixel >= 0) deposit_camera(hit, static_cast<std::size_t>(pixel), dir, w, acc, log);
             return;
         }
         if (depth >= max_depth) {
@@ -289,14 +380,19 @@ void Transport::trace(std::uint64_t k, FluxLedger& ledger, Accumulators& acc, Lo
     }
 }
 
-template <class Log>
-void Transport::deposit_camera(const Hit& hit, const glm::dvec3& dir_in, double w, Accumulators& acc, Log& log) const {
+std::ptrdiff_t Transport::camera_pixel(const glm::dvec3& p) const {
     double px, py;
-    if (!camera->project(hit.position, px, py)) return;
-    if (!(px >= 0.0 && py >= 0.0 && px < gbuffer->width && py < gbuffer->height)) return;
+    if (!camera->project(p, px, py)) return -1;
+    if (!(px >= 0.0 && py >= 0.0 && px < gbuffer->width && py < gbuffer->height)) return -1;
     const int ix = static_cast<int>(px), iy = static_cast<int>(py);
-    const std::size_t index = gbuffer->index(ix, iy);
-    if (!gbuffer->covered[index] || gbuffer->object[index] != hit.object) return;
+    return static_cast<std::ptrdiff_t>(gbuffer->index(ix, iy));
+}
+
+template <class Log>
+void Transport::deposit_camera(const Hit& hit, std::size_t index, const glm::dvec3& dir_in, double w,
+                               Accumulators& acc, Log& log) const {
+    const PixelInfo& pixel = pixel_info[index];
+    if (pixel.object != hit.object) return;   // also rejects pixels the G-buffer does not cover
     glm::dvec3 to_camera = camera->position - hit.position;
     const double dist = glm::length(to_camera);
     if (!(dist > 0.0)) return;
@@ -310,8 +406,8 @@ void Transport::deposit_camera(const Hit& hit, const glm::dvec3& dir_in, double 
     if (tracer->occluded(hit.position, to_camera, 0.0, dist * (1.0 - 1e-6))) return;
     // E_pixel += w / A_pix with A_pix = omega d^2 / cos; stored relative to the pixel's own G-buffer
     // footprint so the fixed-point value stays near w / weight_ref.
-    const double x = (w / weight_ref) * pixel_scale[index] * cos_c / (dist * dist);
-    add_fixed(acc.pix_sum, acc.pix_sq, index, x);
+    const double x = (w / weight_ref) * pixel.scale * cos_c / (dist * dist);
+    add_fixed(acc.pixels[index], x);
 }
 
 double nrmse_of(const Image& e, const Image& se, const std::vector<std::uint8_t>* mask) {
@@ -370,6 +466,11 @@ Transport make_transport(const RayTracer& tracer, const ReceiverChart& chart, co
             const double cos_c = d2 > 0.0 ? glm::dot(glm::dvec3(camera->normal[i]), to_cam) / std::sqrt(d2) : 1.0;
             transport.pixel_scale[i] = std::max(d2, 1e-12) / std::clamp(cos_c, 0.05, 1.0);
         }
+        transport.pixel_info.resize(camera->covered.size());
+        for (std::size_t i = 0; i < camera->covered.size(); ++i) {
+            if (!camera->covered[i] || camera->object[i] < 0) continue;
+            transport.pixel_info[i] = {transport.pixel_scale[i], camera->object[i]};
+        }
     }
 
     return transport;
@@ -394,30 +495,43 @@ ReferenceResult compute_reference(const RayTracer& tracer, const ReceiverChart& 
     const std::size_t pixels = camera_view ? camera->covered.size() : 0;
     tbb::enumerable_thread_specific<Accumulators> accumulators([&] {
         Accumulators a;
-        a.bin_sum.assign(bins, 0);
-        a.bin_sq.assign(bins, 0);
-        a.pix_sum.assign(pixels, 0);
-        a.pix_sq.assign(pixels, 0);
+        a.bins.assign(bins, FixedPair{0, 0});
+        a.pixels.assign(pixels, FixedPair{0, 0});
         return a;
     });
     const std::uint64_t batches = (photons + kBatchSize - 1) / kBatchSize;
     std::vector<FluxLedger> batch_ledgers(batches);
     ProgressBar progress("reference " + scene.name, photons, settings.progress);
 
+    // Each batch is ordered once (batch_order) and then traced in fixed chunks of that order, in parallel
+    // (fine-grained enough to balance two threads on a shared machine); chunk ledgers are summed in chunk
+    // order, so the ledger does not depend on scheduling either.
     auto run_batches = [&] {
-        tbb::parallel_for(tbb::blocked_range<std::uint64_t>(0, batches, 1),
-                          [&](const tbb::blocked_range<std::uint64_t>& range) {
-                              Accumulators& acc = accumulators.local();
-                              for (std::uint64_t b = range.begin(); b < range.end(); ++b) {
-                                  const std::uint64_t first = b * kBatchSize;
-                                  const std::uint64_t last = std::min(photons, first + kBatchSize);
-                                  FluxLedger ledger;
-                                  NoRayLog log;
-                                  for (std::uint64_t k = first; k < last; ++k) transport.trace(k, ledger, acc, log);
-                                  batch_ledgers[b] = ledger;
-                                  progress.advance(last - first);
-                              }
-                          });
+        tbb::parallel_for(tbb::blocked_range<std::uint64_t>(0, batches, 1), [&](const tbb::blocked_range<std::uint64_t>& range) {
+            for (std::uint64_t b = range.begin(); b < range.end(); ++b) {
+                const std::uint64_t first = b * kBatchSize;
+                const std::uint64_t last = std::min(photons, first + kBatchSize);
+                // Per batch, not per thread: a thread waiting on the chunks below may start another batch.
+                std::vector<std::uint32_t> order, scratch;
+                transport.batch_order(first, last, order, scratch);
+                const std::size_t chunks = (order.size() + kChunkSize - 1) / kChunkSize;
+                std::vector<FluxLedger> chunk_ledgers(chunks);
+                tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, 1), [&](const tbb::blocked_range<std::size_t>& cr) {
+                    Accumulators& acc = accumulators.local();
+                    NoRayLog log;
+                    for (std::size_t c = cr.begin(); c < cr.end(); ++c) {
+                        FluxLedger ledger;
+                        const std::size_t end = std::min(order.size(), (c + 1) * kChunkSize);
+                        for (std::size_t j = c * kChunkSize; j < end; ++j) transport.trace(first + order[j], ledger, acc, log);
+                        chunk_ledgers[c] = ledger;
+                    }
+                });
+                FluxLedger ledger;
+                for (const FluxLedger& l : chunk_ledgers) add_ledger(ledger, l);
+                batch_ledgers[b] = ledger;
+                progress.advance(last - first);
+            }
+        });
     };
     if (settings.threads > 0) {
         tbb::task_arena arena(settings.threads);
@@ -428,21 +542,13 @@ ReferenceResult compute_reference(const RayTracer& tracer, const ReceiverChart& 
     progress.finish();
 
     ReferenceResult result;
-    for (const FluxLedger& l : batch_ledgers) {
-        result.ledger.emitted += l.emitted;
-        result.ledger.deposited_receiver += l.deposited_receiver;
-        result.ledger.deposited_other += l.deposited_other;
-        result.ledger.direct += l.direct;
-        result.ledger.escaped += l.escaped;
-        result.ledger.absorbed += l.absorbed;
-        result.ledger.truncated += l.truncated;
-    }
+    for (const FluxLedger& l : batch_ledgers) add_ledger(result.ledger, l);
 
     // Integer sums are exact, so combining the threads' accumulators in any order gives the same bits.
     std::vector<std::int64_t> bin_sum(bins, 0), bin_sq(bins, 0), pix_sum(pixels, 0), pix_sq(pixels, 0);
     for (const Accumulators& a : accumulators) {
-        for (std::size_t i = 0; i < bins; ++i) bin_sum[i] += a.bin_sum[i], bin_sq[i] += a.bin_sq[i];
-        for (std::size_t i = 0; i < pixels; ++i) pix_sum[i] += a.pix_sum[i], pix_sq[i] += a.pix_sq[i];
+        for (std::size_t i = 0; i < bins; ++i) bin_sum[i] += a.bins[i][0], bin_sq[i] += a.bins[i][1];
+        for (std::size_t i = 0; i < pixels; ++i) pix_sum[i] += a.pixels[i][0], pix_sq[i] += a.pixels[i][1];
     }
 
     const double n = static_cast<double>(photons);
@@ -499,16 +605,18 @@ std::vector<RecordedRay> record_reference_rays(const RayTracer& tracer, const Re
     std::unique_ptr<CameraModel> camera_model;
     const Transport transport = make_transport(tracer, chart, camera_view ? camera : nullptr, settings, camera_model);
     Accumulators acc;
-    acc.bin_sum.assign(static_cast<std::size_t>(chart.width()) * chart.height(), 0);
-    acc.bin_sq = acc.bin_sum;
-    if (camera_view) {
-        acc.pix_sum.assign(camera->covered.size(), 0);
-        acc.pix_sq = acc.pix_sum;
-    }
+    acc.bins.assign(static_cast<std::size_t>(chart.width()) * chart.height(), FixedPair{0, 0});
+    if (camera_view) acc.pixels.assign(camera->covered.size(), FixedPair{0, 0});
     RayRecorder recorder;
     recorder.offset = scene_ray_offset(tracer.frame());
     FluxLedger ledger;
-    for (std::uint64_t k = 0; k < settings.photons; ++k) transport.trace(k, ledger, acc, recorder);
+    // The same batches and the same order within each batch as compute_reference.
+    std::vector<std::uint32_t> order, scratch;
+    for (std::uint64_t first = 0; first < settings.photons; first += kBatchSize) {
+        const std::uint64_t last = std::min(settings.photons, first + kBatchSize);
+        transport.batch_order(first, last, order, scratch);
+        for (const std::uint32_t i : order) transport.trace(first + i, ledger, acc, recorder);
+    }
     return std::move(recorder.rays);
 }
 

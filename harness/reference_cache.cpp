@@ -23,7 +23,7 @@ namespace caustics {
 namespace {
 
 // Bump whenever reference.cpp changes what it computes (transport, estimators, sampling).
-constexpr std::uint32_t kReferenceVersion = 1;
+constexpr std::uint32_t kReferenceVersion = 2;
 constexpr std::uint32_t kFileFormat = 1;
 constexpr char kMagic[8] = {'C', 'A', 'U', 'S', 'R', 'E', 'F', '\n'};
 
