@@ -30,22 +30,6 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-json params_json(const MethodInfo& info, const ParamSet& params) {
-    json out = json::object();
-    for (const ParamSpec& spec : info.params) {
-        auto it = params.values().find(spec.name);
-        if (it == params.values().end()) continue;
-        const std::string& text = it->second;
-        switch (spec.type) {
-        case ParamType::Int: out[spec.name] = std::stoll(text); break;
-        case ParamType::Float: out[spec.name] = json_number(std::stod(text)); break;
-        case ParamType::Bool: out[spec.name] = text == "true"; break;
-        case ParamType::Enum: out[spec.name] = text; break;
-        }
-    }
-    return out;
-}
-
 json error_json(const ErrorMetrics* e, bool radiometric) {
     json out;
     out["nrmse"] = e ? json_number(e->nrmse) : json(nullptr);
@@ -113,6 +97,22 @@ std::string join_messages(const std::vector<std::string>& parts) {
 }
 
 }  // namespace
+
+json params_json(const MethodInfo& info, const ParamSet& params) {
+    json out = json::object();
+    for (const ParamSpec& spec : info.params) {
+        auto it = params.values().find(spec.name);
+        if (it == params.values().end()) continue;
+        const std::string& text = it->second;
+        switch (spec.type) {
+        case ParamType::Int: out[spec.name] = std::stoll(text); break;
+        case ParamType::Float: out[spec.name] = json_number(std::stod(text)); break;
+        case ParamType::Bool: out[spec.name] = text == "true"; break;
+        case ParamType::Enum: out[spec.name] = text; break;
+        }
+    }
+    return out;
+}
 
 json json_number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 

@@ -122,6 +122,9 @@ private:
     std::unique_ptr<Impl> impl_;
 };
 
+// The resolved parameters as typed JSON (ints, numbers, booleans, strings): metrics.json's `params`.
+nlohmann::json params_json(const MethodInfo& info, const ParamSet& params);
+
 // JSON number, or null when not finite (metrics.json never holds NaN or Inf).
 nlohmann::json json_number(double v);
 

@@ -35,22 +35,6 @@ const char* generator_name(HeightGenerator g) {
     return "?";
 }
 
-json params_json(const MethodInfo& info, const ParamSet& params) {
-    json out = json::object();
-    for (const ParamSpec& spec : info.params) {
-        auto it = params.values().find(spec.name);
-        if (it == params.values().end()) continue;
-        const std::string& text = it->second;
-        switch (spec.type) {
-        case ParamType::Int: out[spec.name] = std::stoll(text); break;
-        case ParamType::Float: out[spec.name] = json_number(std::stod(text)); break;
-        case ParamType::Bool: out[spec.name] = text == "true"; break;
-        case ParamType::Enum: out[spec.name] = text; break;
-        }
-    }
-    return out;
-}
-
 std::string frame_name(int i, const char* ext) {
     char buf[64];
     std::snprintf(buf, sizeof buf, "frame_%03d.%s", i, ext);
