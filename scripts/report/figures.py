@@ -69,11 +69,13 @@ def error_vs_iterations(frame, scene, directory):
         return None
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
     style = _style(runs["label"].unique())
+    grids = sorted({grid for (_, grid), _ in lines})
+    dashes = ["-", "--", ":", "-."]
     for (label, grid), group in lines:
         g = group.groupby("iterations")["error"].median().sort_index()
         color, marker = style[label]
         ax.plot(g.index, g.values, color=color, marker=marker, label=f"{label}, grid {int(grid)}",
-                alpha=0.5 + 0.5 * min(1.0, grid / runs["grid"].max()))
+                linestyle=dashes[grids.index(grid) % len(dashes)])
     ax.set_yscale("log")
     ax.set_xlabel("iterations")
     ax.set_ylabel("receiver-map nrmse vs reference  (log)")
