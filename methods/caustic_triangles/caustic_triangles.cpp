@@ -28,6 +28,20 @@
 namespace caustics {
 namespace {
 
+// One dispersion sample's map joins the scalar map (the mean over samples, the quantity the reference
+// estimates by sampling the index uniformly) and the RGB map (weighted by the sample's spectral ramp).
+void add_spectral_sample(const Image& sample, float mean_weight, const std::array<float, 3>& rgb_weight,
+                         Image& scalar, Image& rgb) {
+    tbb::parallel_for(tbb::blocked_range<int>(0, sample.height, 16), [&](const tbb::blocked_range<int>& rows) {
+        for (int y = rows.begin(); y != rows.end(); ++y)
+            for (int x = 0; x < sample.width; ++x) {
+                const float e = sample.at(x, y);
+                scalar.at(x, y) += mean_weight * e;
+                for (int ch = 0; ch < 3; ++ch) rgb.at(x, y, ch) += rgb_weight[ch] * e;
+            }
+    });
+}
+
 using caustic_triangles::spectral_weights;
 
 // The receiver's chart as an affine map (plane) or an x-y rectangle (height field), read once per
@@ -388,16 +402,8 @@ void CausticTriangles::render_texture(const FrameGeometry& frame, const TextureR
         raster_stats.nonfinite += s.nonfinite;
         raster_stats.too_large += s.too_large;
         if (dispersive) {
-            const std::array<float, 3> w = weights[static_cast<std::size_t>(k)];
-            const float mean = 1.0f / samples;
-            tbb::parallel_for(tbb::blocked_range<int>(0, H, 16), [&](const tbb::blocked_range<int>& rows) {
-                for (int y = rows.begin(); y != rows.end(); ++y)
-                    for (int x = 0; x < W; ++x) {
-                        const float e = sample_map_.at(x, y);
-                        out.texture.at(x, y) += mean * e;
-                        for (int ch = 0; ch < 3; ++ch) out.texture_rgb.at(x, y, ch) += w[ch] * e;
-                    }
-            });
+            add_spectral_sample(sample_map_, 1.0f / samples, weights[static_cast<std::size_t>(k)], out.texture,
+                                out.texture_rgb);
         }
         raster_ms += clock.ms();
     }
@@ -463,16 +469,8 @@ CausticOutput CausticTriangles::render(const FrameGeometry& frame, const RenderR
         const RasterStats s = raster_.draw({image_, triangles_, values_, {}}, {coverage_, false, false}, target);
         raster_stats.nonfinite += s.nonfinite;
         if (dispersive) {
-            const std::array<float, 3> w = weights[static_cast<std::size_t>(k)];
-            const float mean = 1.0f / samples;
-            tbb::parallel_for(tbb::blocked_range<int>(0, H, 16), [&](const tbb::blocked_range<int>& rows) {
-                for (int y = rows.begin(); y != rows.end(); ++y)
-                    for (int x = 0; x < W; ++x) {
-                        const float e = sample_map_.at(x, y);
-                        out.receiver.at(x, y) += mean * e;
-                        for (int ch = 0; ch < 3; ++ch) out.receiver_rgb.at(x, y, ch) += w[ch] * e;
-                    }
-            });
+            add_spectral_sample(sample_map_, 1.0f / samples, weights[static_cast<std::size_t>(k)], out.receiver,
+                                out.receiver_rgb);
         }
         raster_ms += clock.ms();
     }
