@@ -7,6 +7,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "band_bins.hpp"
+
 namespace caustics {
 namespace {
 
@@ -243,18 +245,7 @@ GBufferStats GBufferRaster::draw_clipped(const LightProjection& view, const GBuf
         }
     });
     // Offsets, band-major then chunk order: each band lists its triangles in input order.
-    m.cursors.resize(chunks * bands);
-    m.band_start.assign(static_cast<std::size_t>(bands) + 1, 0);
-    std::uint32_t total = 0;
-    for (int b = 0; b < bands; ++b) {
-        m.band_start[static_cast<std::size_t>(b)] = total;
-        for (std::size_t c = 0; c < chunks; ++c) {
-            m.cursors[c * bands + b] = total;
-            total += m.counts[c * bands + b];
-        }
-    }
-    m.band_start[static_cast<std::size_t>(bands)] = total;
-    m.entries.resize(total);
+    m.entries.resize(band_offsets(m.counts, chunks, static_cast<std::size_t>(bands), m.cursors, m.band_start));
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, 1), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t c = r.begin(); c != r.end(); ++c) {
             std::uint32_t* cursor = &m.cursors[c * bands];

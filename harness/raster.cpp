@@ -8,6 +8,8 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include "band_bins.hpp"
+
 namespace caustics {
 namespace {
 
@@ -214,16 +216,7 @@ struct TriangleRaster::Impl {
                 }
             }
         });
-        std::uint32_t running = 0;
-        for (std::size_t b = 0; b < nb; ++b) {
-            band_start[b] = running;
-            for (int c = 0; c < chunks; ++c) {
-                cursors[static_cast<std::size_t>(c) * nb + b] = running;
-                running += counts[static_cast<std::size_t>(c) * nb + b];
-            }
-        }
-        band_start[nb] = running;
-        grid_entries.resize(running);
+        grid_entries.resize(band_offsets(counts, static_cast<std::size_t>(chunks), nb, cursors, band_start));
         tbb::parallel_for(0, chunks, [&](int c) {
             std::uint32_t* cursor = cursors.data() + static_cast<std::size_t>(c) * nb;
             const int j1 = std::min(g, (c + 1) * kGridChunkRows);
@@ -428,18 +421,9 @@ RasterStats TriangleRaster::draw(const RasterTriangles& batch, const RasterOptio
         });
     }
 
-    // Entry offsets: band-major, chunk-minor, so each band lists its triangles in input order.
-    std::uint32_t running = 0;
+    // Entry offsets (band_bins.hpp): each band lists its triangles in input order.
     if (!grid) {
-    for (std::size_t b = 0; b < bands; ++b) {
-        m.band_start[b] = running;
-        for (std::size_t c = 0; c < chunks; ++c) {
-            m.cursors[c * bands + b] = running;
-            running += m.counts[c * bands + b];
-        }
-    }
-    m.band_start[bands] = running;
-    m.entries.resize(running);
+    m.entries.resize(band_offsets(m.counts, chunks, bands, m.cursors, m.band_start));
 
     // Pass 2: fill the band lists.
     tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
