@@ -17,6 +17,7 @@
 #include "errors.hpp"
 #include "sweep.hpp"
 #include "sweep_spec.hpp"
+#include "test_support.hpp"
 
 using namespace caustics;
 namespace fs = std::filesystem;
@@ -35,12 +36,7 @@ fs::path write_file(const fs::path& path, const std::string& text) {
     return path;
 }
 
-std::string read_file(const fs::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
+std::string read_file(const fs::path& path) { return caustics::test_support::slurp(path); }
 
 std::vector<std::string> lines_of(const std::string& text) {
     std::vector<std::string> lines;
@@ -49,7 +45,7 @@ std::vector<std::string> lines_of(const std::string& text) {
     return lines;
 }
 
-std::string shell_quote(const std::string& s) { return "'" + s + "'"; }
+std::string shell_quote(const std::string& s) { return caustics::test_support::quote(s); }
 
 int run_program(const std::string& args, const fs::path& log) {
     const std::string command = std::string(CAUSTICS_BINARY) + " " + args + " >" + shell_quote(log.string()) + " 2>&1";

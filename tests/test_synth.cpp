@@ -21,6 +21,7 @@
 #include "errors.hpp"
 #include "image_io.hpp"
 #include "synth.hpp"
+#include "test_support.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -28,18 +29,8 @@ using namespace caustics;
 
 namespace {
 
-std::string slurp(const fs::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
-
-std::string quote(const std::string& s) {
-    std::string q = "'";
-    for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    return q + "'";
-}
+using caustics::test_support::quote;
+using caustics::test_support::slurp;
 
 fs::path source_scene(const std::string& name) { return fs::path(CAUSTICS_SOURCE_DIR) / "scenes" / (name + ".json"); }
 
