@@ -9,6 +9,7 @@
 #include <tbb/parallel_for.h>
 
 #include "band_bins.hpp"
+#include "raster_area_coverage.hpp"
 
 namespace caustics {
 namespace {
@@ -20,7 +21,8 @@ constexpr int kSubpixelBits = 8;        // PixelCenter: fixed-point vertex snapp
 constexpr double kSubpixel = 1 << kSubpixelBits;
 constexpr double kMaxFixedCoordinate = 1 << 22;  // pixels; keeps edge functions well inside int64
 
-constexpr int kRows = TriangleRaster::kBandRows;   // Area: band accumulators are column-major
+using area_coverage::accumulate_edge;
+using area_coverage::kRows;   // Area: band accumulators are column-major
 
 enum TriangleKind : std::uint8_t { kSkip = 0, kNormal = 1, kOnePixel = 2, kDegenerate = 3 };
 
@@ -38,102 +40,6 @@ struct Box {
 void shift_range(double lo, double hi, double size, int& k_lo, int& k_hi) {
     k_lo = static_cast<int>(std::floor(-hi / size)) + 1;
     k_hi = static_cast<int>(std::ceil((size - lo) / size)) - 1;
-}
-
-// Phi(u) = integral_0^u clamp(t, 0, 1) dt: the area right of a sloped edge inside one pixel column.
-inline double phi(double u) {
-    if (u <= 0.0) return 0.0;
-    if (u >= 1.0) return u - 0.5;
-    return 0.5 * u * u;
-}
-
-// Accumulates into one band the x-derivative of the signed coverage of the segment (x0, y0) -> (x1, y1)
-// with x already inside [0, width]. `acc` holds band rows [row0, row1) with `stride` doubles each; a
-// prefix sum along a row turns it into coverage (edges going down the rows add, going up subtract).
-// In a row slice of height dy where the edge spans columns i0..i1, column i gets
-// d * (Phi(i+1-xl) - Phi(i+1-xr)) / (xr - xl), d = dy * weight; d / (xr - xl) = weight / |dx/dy| is the
-// same for every row, so the only division is per edge. The last column takes the remainder, so each
-// row slice deposits exactly d whatever the rounding (flux conservation).
-inline void accumulate_line(double* acc, std::size_t stride, int row0, int row1, double width, double x0,
-                            double y0, double x1, double y1, double weight) {
-    if (y0 == y1) return;
-    double sign = weight;
-    if (y0 > y1) {
-        std::swap(x0, x1);
-        std::swap(y0, y1);
-        sign = -weight;
-    }
-    const double ytop = std::max(y0, static_cast<double>(row0));
-    const double ybot = std::min(y1, static_cast<double>(row1));
-    if (ytop >= ybot) return;
-    const double dxdy = (x1 - x0) / (y1 - y0);
-    const double slope = dxdy != 0.0 ? sign / std::abs(dxdy) : 0.0;
-    int row = static_cast<int>(ytop);   // ytop >= row0 >= 0: truncation is floor
-    double* a = acc + (row - row0);   // transposed band: column i of this row at a[i * kRows]
-    double ya = ytop;
-    double xa = x0 + (ya - y0) * dxdy;
-    while (ya < ybot) {
-        const double yb = std::min(row + 1.0, ybot);
-        const double xb = x0 + (yb - y0) * dxdy;
-        const double d = sign * (yb - ya);
-        const double xl = std::clamp(std::min(xa, xb), 0.0, width);
-        const double xr = std::clamp(std::max(xa, xb), 0.0, width);
-        const int i0 = static_cast<int>(xl);
-        if (xr <= i0 + 1.0) {
-            // Within one pixel column: the part right of the mean x stays in column i0.
-            const double xm = 0.5 * (xl + xr) - i0;
-            a[i0 * kRows] += d - d * xm;
-            a[(i0 + 1) * kRows] += d * xm;
-        } else {
-            const int i1 = static_cast<int>(xr) - (static_cast<int>(xr) == xr ? 1 : 0);   // ceil(xr) - 1, xr >= 0
-            double previous = slope * (0.5 * (i0 + 1.0 - xl) * (i0 + 1.0 - xl));   // phi(c - xr) = 0 here
-            a[i0 * kRows] += previous;
-            for (int i = i0 + 1; i < i1; ++i) {   // fully crossed columns: phi(c - xl) = c - xl - 1/2
-                const double cover = slope * (i + 0.5 - xl);
-                a[i * kRows] += cover - previous;
-                previous = cover;
-            }
-            const double c = i1 + 1.0;
-            const double cover = slope * (phi(c - xl) - phi(c - xr));
-            a[i1 * kRows] += cover - previous;
-            a[(i1 + 1) * kRows] += d - cover;
-        }
-        xa = xb;
-        ya = yb;
-        ++row;
-        ++a;
-    }
-}
-
-// Splits an edge at x = 0 and x = width and clamps the outside pieces onto those lines: coverage of a
-// pixel column depends only on the edge's crossings to its left, so this is exact inside the image.
-void accumulate_edge(double* acc, std::size_t stride, int row0, int row1, double width, glm::dvec2 a,
-                     glm::dvec2 b, double weight) {
-    if (a.y == b.y) return;
-    if (std::max(a.y, b.y) <= row0 || std::min(a.y, b.y) >= row1) return;
-    if (a.x >= 0.0 && a.x <= width && b.x >= 0.0 && b.x <= width) {
-        accumulate_line(acc, stride, row0, row1, width, a.x, a.y, b.x, b.y, weight);
-        return;
-    }
-    double ts[4] = {0.0, 1.0, 1.0, 1.0};
-    int n = 1;
-    const double dx = b.x - a.x;
-    if (dx != 0.0) {
-        for (double line : {0.0, width}) {
-            const double t = (line - a.x) / dx;
-            if (t > 0.0 && t < 1.0) ts[n++] = t;
-        }
-    }
-    if (n == 3 && ts[2] < ts[1]) std::swap(ts[1], ts[2]);
-    ts[n++] = 1.0;
-    for (int k = 0; k + 1 < n; ++k) {
-        const glm::dvec2 p = a + ts[k] * (b - a);
-        const glm::dvec2 q = a + ts[k + 1] * (b - a);
-        const double xc = std::clamp(0.5 * (p.x + q.x), 0.0, width);
-        const bool outside = 0.5 * (p.x + q.x) != xc;
-        accumulate_line(acc, stride, row0, row1, width, outside ? xc : std::clamp(p.x, 0.0, width), p.y,
-                        outside ? xc : std::clamp(q.x, 0.0, width), q.y, weight);
-    }
 }
 
 inline std::int64_t floor_div(std::int64_t a, std::int64_t b) {

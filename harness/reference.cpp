@@ -29,6 +29,7 @@
 #include <tbb/task_arena.h>
 
 #include "hash.hpp"
+#include "photon_source.hpp"
 #include "progress.hpp"
 #include "ray_offset.hpp"
 #include "ray_tracer.hpp"
@@ -43,109 +44,6 @@ constexpr std::size_t kChunkSize = 2048;
 // One photon's normalised weight (<= 1) becomes an integer of at most 2^30: 1e9 photons in one bin
 // stay below 2^60, and each contribution keeps ~2^-30 relative precision.
 constexpr double kFixedScale = 1073741824.0;  // 2^30
-
-// Counter-based random numbers: value (seed, photon, dimension) -> [0, 1). mix64 is a bijection, so
-// distinct photons get distinct, decorrelated states.
-class PhotonRandom {
-public:
-    PhotonRandom(std::uint64_t seed, std::uint64_t photon)
-        : state_(mix64(mix64(seed) + photon * 0xD1B54A32D192ED03ull)) {}
-    double next() {
-        const std::uint64_t h = mix64(state_ + (++dimension_) * 0x9E3779B97F4A7C15ull);
-        return static_cast<double>(h >> 11) * 0x1.0p-53;
-    }
-
-private:
-    std::uint64_t state_;
-    std::uint64_t dimension_ = 0;
-};
-
-void orthonormal_basis(const glm::dvec3& n, glm::dvec3& a, glm::dvec3& b) {
-    // Duff et al. 2017, "Building an Orthonormal Basis, Revisited".
-    const double sign = std::copysign(1.0, n.z);
-    const double s = -1.0 / (sign + n.z);
-    const double t = n.x * n.y * s;
-    a = {1.0 + sign * n.x * n.x * s, sign * t, -sign * n.x};
-    b = {t, sign + n.y * n.y * s, -n.y};
-}
-
-// Where photons of one light start and how much flux each carries.
-struct Emitter {
-    LightType type = LightType::Directional;
-    glm::dvec3 direction{0, 0, -1}, axis_a{1, 0, 0}, axis_b{0, 1, 0};
-    glm::dvec3 corner{0.0};            // directional: rectangle origin
-    double extent_a = 0, extent_b = 0; // directional: rectangle sides
-    glm::dvec3 position{0.0};          // point light
-    double cos_max = -1.0;             // point light: cone half-angle cosine (-1 = full sphere)
-    double power = 0.0;                // total flux this light sends through the sampled domain [W]
-    double flux_per_photon = 0.0;
-
-    void sample(double u1, double u2, glm::dvec3& origin, glm::dvec3& dir) const {
-        if (type == LightType::Directional) {
-            origin = corner + (u1 * extent_a) * axis_a + (u2 * extent_b) * axis_b;
-            dir = direction;
-        } else {
-            const double cos_t = 1.0 - u1 * (1.0 - cos_max);
-            const double sin_t = std::sqrt(std::max(0.0, 1.0 - cos_t * cos_t));
-            const double phi = 2.0 * std::numbers::pi * u2;
-            origin = position;
-            dir = glm::normalize(cos_t * direction + sin_t * (std::cos(phi) * axis_a + std::sin(phi) * axis_b));
-        }
-    }
-};
-
-Emitter make_emitter(const Light& light, const FrameGeometry& frame) {
-    Emitter e;
-    e.type = light.type;
-    Bounds3 target = frame.specular_bounds.valid() ? frame.specular_bounds : frame.receiver().bounds;
-    if (!target.valid()) target = frame.scene_bounds;
-    const glm::dvec3 lo = target.lo, hi = target.hi;
-    const double size = std::max(1e-6, glm::length(hi - lo));
-    if (light.type == LightType::Directional) {
-        e.direction = glm::normalize(light.direction);
-        orthonormal_basis(e.direction, e.axis_a, e.axis_b);
-        double amin = 1e300, amax = -1e300, bmin = 1e300, bmax = -1e300;
-        for (int k = 0; k < 8; ++k) {
-            const glm::dvec3 c((k & 1) ? hi.x : lo.x, (k & 2) ? hi.y : lo.y, (k & 4) ? hi.z : lo.z);
-            amin = std::min(amin, glm::dot(c, e.axis_a));
-            amax = std::max(amax, glm::dot(c, e.axis_a));
-            bmin = std::min(bmin, glm::dot(c, e.axis_b));
-            bmax = std::max(bmax, glm::dot(c, e.axis_b));
-        }
-        // A small margin so that silhouettes are not clipped by round-off.
-        const double margin = 1e-4 * size;
-        amin -= margin, amax += margin, bmin -= margin, bmax += margin;
-        // Start behind every object of the scene along the light direction.
-        const Bounds3& all = frame.scene_bounds.valid() ? frame.scene_bounds : target;
-        double dmin = 1e300;
-        for (int k = 0; k < 8; ++k) {
-            const glm::dvec3 c((k & 1) ? all.hi.x : all.lo.x, (k & 2) ? all.hi.y : all.lo.y,
-                               (k & 4) ? all.hi.z : all.lo.z);
-            dmin = std::min(dmin, glm::dot(c, e.direction));
-        }
-        dmin -= 0.01 * size + 1e-3;
-        e.corner = dmin * e.direction + amin * e.axis_a + bmin * e.axis_b;
-        e.extent_a = amax - amin;
-        e.extent_b = bmax - bmin;
-        e.power = light.irradiance * e.extent_a * e.extent_b;
-    } else {
-        e.position = light.position;
-        const glm::dvec3 center = 0.5 * (lo + hi);
-        const double radius = 0.5 * glm::length(hi - lo) * (1.0 + 1e-4) + 1e-6;
-        const double dist = glm::length(center - light.position);
-        if (dist > radius) {
-            e.direction = (center - light.position) / dist;
-            const double sin_max = radius / dist;
-            e.cos_max = std::sqrt(std::max(0.0, 1.0 - sin_max * sin_max));
-        } else {
-            e.direction = {0.0, 0.0, -1.0};
-            e.cos_max = -1.0;
-        }
-        orthonormal_basis(e.direction, e.axis_a, e.axis_b);
-        e.power = light.intensity * 2.0 * std::numbers::pi * (1.0 - e.cos_max);
-    }
-    return e;
-}
 
 // Unpolarised Fresnel reflectance of a dielectric interface.
 double fresnel_reflectance(double cos_i, double cos_t, double n_i, double n_t) {
@@ -206,7 +104,9 @@ struct Transport {
     std::uint64_t seed = 1;
 
     void batch_order(std::uint64_t first, std::uint64_t last, std::vector<std::uint32_t>& order,
-                     std::vector<std::uint32_t>& scratch) const;
+                     std::vector<std::uint32_t>& scratch) const {
+        photon_batch_order(seed, emitters.size(), first, last, order, scratch);
+    }
     template <class Log>
     void trace(std::uint64_t k, FluxLedger& ledger, Accumulators& acc, Log& log) const;
     // The pixel a deposit at p would land in, or -1 (outside the image or behind the camera).
@@ -230,57 +130,6 @@ void add_fixed(FixedPair& acc, double x) {
     // x >= 0: adding 1/2 and truncating rounds to nearest, without a libm call.
     acc[0] += static_cast<std::int64_t>(x * kFixedScale + 0.5);
     acc[1] += static_cast<std::int64_t>(x * x * kFixedScale + 0.5);
-}
-
-// Interleaves the bits of two 8-bit integers (Morton / Z order).
-std::uint32_t morton2(std::uint32_t x, std::uint32_t y) {
-    auto spread = [](std::uint32_t v) {
-        v &= 0xFFu;
-        v = (v | (v << 4)) & 0x0F0Fu;
-        v = (v | (v << 2)) & 0x3333u;
-        v = (v | (v << 1)) & 0x5555u;
-        return v;
-    };
-    return spread(x) | (spread(y) << 1);
-}
-
-// The order in which the photons [first, last) of one batch are traced: grouped by light and then along
-// a Z-order curve over a 256 x 256 grid of their two emission random numbers, so that consecutive
-// photons start close together and take similar paths (coherent BVH traversal, height-field and
-// accumulator accesses). Every photon's random numbers depend only on its index, and deposits are
-// integer sums, so the order changes nothing but the round-off of the batch's flux ledger; it is a fixed
-// function of the batch (stable counting sorts), so results stay independent of the thread count.
-// `order` receives photon offsets k - first; `scratch` holds keys.
-void Transport::batch_order(std::uint64_t first, std::uint64_t last, std::vector<std::uint32_t>& order,
-                            std::vector<std::uint32_t>& scratch) const {
-    const std::size_t n = static_cast<std::size_t>(last - first);
-    constexpr std::size_t kCells = 65536;
-    std::vector<std::uint32_t>& cell = scratch;
-    cell.resize(2 * n + kCells + 1);
-    std::uint32_t* key = cell.data();
-    std::uint32_t* tmp = key + n;
-    std::uint32_t* count = tmp + n;
-    std::fill(count, count + kCells + 1, 0u);
-    for (std::size_t i = 0; i < n; ++i) {
-        PhotonRandom rng(seed, first + i);
-        const double u1 = rng.next(), u2 = rng.next();
-        key[i] = morton2(static_cast<std::uint32_t>(u1 * 256.0), static_cast<std::uint32_t>(u2 * 256.0));
-        ++count[key[i] + 1];
-    }
-    for (std::size_t c = 1; c <= kCells; ++c) count[c] += count[c - 1];
-    order.resize(n);
-    const std::uint64_t lights = emitters.size();
-    std::uint32_t* by_cell = lights > 1 ? tmp : order.data();
-    for (std::size_t i = 0; i < n; ++i) by_cell[count[key[i]]++] = static_cast<std::uint32_t>(i);
-    if (lights > 1) {   // stable second pass by light (photon k belongs to light k mod L)
-        std::vector<std::uint32_t> light_start(lights + 1, 0u);
-        for (std::size_t i = 0; i < n; ++i) ++light_start[(first + i) % lights + 1];
-        for (std::size_t l = 1; l <= lights; ++l) light_start[l] += light_start[l - 1];
-        for (std::size_t j = 0; j < n; ++j) {
-            const std::uint32_t i = by_cell[j];
-            order[light_start[(first + i) % lights]++] = i;
-        }
-    }
 }
 
 template <class Log>
