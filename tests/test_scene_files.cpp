@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "errors.hpp"
+#include "frame.hpp"
 #include "heightfield.hpp"
 #include "scene.hpp"
 
