@@ -85,6 +85,14 @@ struct ChartMap {
     }
 };
 
+// The height-field dielectric whose caustics this method draws (capabilities() guarantees one).
+const ObjectInstance* water_surface(const FrameGeometry& frame) {
+    const ObjectInstance* water = nullptr;
+    for (const ObjectInstance& o : frame.objects)
+        if (o.heightfield && o.object->material.type == MaterialType::Dielectric) water = &o;
+    return water;
+}
+
 class CausticTriangles final : public Method {
 public:
     explicit CausticTriangles(const ParamSet& p)
@@ -110,6 +118,12 @@ private:
                               double ior, double absorption, const glm::dvec3& light_dir,
                               bool periodic_target = false);
     void triangle_values(const ChartMap& map, double scale, Counters& counters);
+    // One pass per dispersion sample (one pass without dispersion): refract every vertex with that
+    // sample's index, turn the triangles into flux values and rasterise them. `scalar` receives the
+    // samples' average, `rgb` their spectral sum (dispersion only); `periodic` wraps toroidally.
+    void draw_dispersion_samples(const FrameGeometry& frame, const ChartMap& map, int W, int H, double scale,
+                                 bool periodic, Image& scalar, Image& rgb, Counters& counters,
+                                 RasterStats& raster_stats, double& refract_ms, double& raster_ms);
 
     int grid_;
     int dispersion_samples_;
@@ -350,6 +364,41 @@ void CausticTriangles::ensure_topology() {
         }
 }
 
+void CausticTriangles::draw_dispersion_samples(const FrameGeometry& frame, const ChartMap& map, int W, int H,
+                                               double scale, bool periodic, Image& scalar, Image& rgb,
+                                               Counters& counters, RasterStats& raster_stats, double& refract_ms,
+                                               double& raster_ms) {
+    const ObjectInstance* water = water_surface(frame);
+    const Material& material = water->object->material;
+    const glm::dvec3 light_dir = glm::normalize(frame.scene->lights[0].direction);
+    const double absorption = absorption_ ? material.absorption : 0.0;
+    const bool dispersive = material.dispersion > 0.0;
+    const int samples = dispersive ? dispersion_samples_ : 1;
+    const auto weights = dispersive ? spectral_weights(samples) : std::vector<std::array<float, 3>>{};
+    if (dispersive && (sample_map_.width != W || sample_map_.height != H)) sample_map_ = Image(W, H);
+    Stopwatch clock;
+    for (int k = 0; k < samples; ++k) {
+        // Midpoint rule over [ior, ior + dispersion]: the mean of the samples estimates the reference's
+        // uniform average over that range.
+        const double ior = material.ior + (dispersive ? material.dispersion * (k + 0.5) / samples : 0.0);
+        clock.reset();
+        const Counters c = refract_vertices(frame, map, W, H, ior, absorption, light_dir, periodic);
+        counters.lost += c.lost;
+        counters.not_converged += c.not_converged;
+        triangle_values(map, scale, counters);
+        refract_ms += clock.ms();
+
+        clock.reset();
+        Image& target = dispersive ? sample_map_ : scalar;
+        const RasterStats st = raster_.draw({image_, triangles_, values_, {}}, {coverage_, periodic, false}, target);
+        raster_stats.nonfinite += st.nonfinite;
+        raster_stats.too_large += st.too_large;
+        if (dispersive)
+            add_spectral_sample(sample_map_, 1.0f / samples, weights[static_cast<std::size_t>(k)], scalar, rgb);
+        raster_ms += clock.ms();
+    }
+}
+
 // Periodic caustic texture (Stam, "Periodic Caustic Textures"): the surface grid spans exactly one
 // spatial period (its last row and column repeat the first on a periodic surface), every vertex is
 // refracted onto the horizontal plane `depth` below the base level, and the triangles are accumulated
@@ -357,9 +406,7 @@ void CausticTriangles::ensure_topology() {
 // tile is conserved: mean texture = E0 cos(theta_i) * transmittance * absorption.
 void CausticTriangles::render_texture(const FrameGeometry& frame, const TextureRequest& request, CausticOutput& out) {
     const Scene& scene = *frame.scene;
-    const ObjectInstance* water = nullptr;
-    for (const ObjectInstance& o : frame.objects)
-        if (o.heightfield && o.object->material.type == MaterialType::Dielectric) water = &o;
+    const ObjectInstance* water = water_surface(frame);
     const HeightField& hf = *water->heightfield;
     const Material& material = water->object->material;
     const glm::dvec3 light_dir = glm::normalize(scene.lights[0].direction);
@@ -375,38 +422,13 @@ void CausticTriangles::render_texture(const FrameGeometry& frame, const TextureR
     const ChartMap map(glm::dvec3(hf.origin.x, hf.origin.y, receiver_z), glm::dvec3(size.x, 0.0, 0.0),
                        glm::dvec3(0.0, size.y, 0.0));
     const double scale = static_cast<double>(W) * H / (size.x * size.y);   // 1 / texel area
-    const double absorption = absorption_ ? material.absorption : 0.0;
     double refract_ms = clock.ms(), raster_ms = 0.0;
-
-    const bool dispersive = material.dispersion > 0.0;
-    const int samples = dispersive ? dispersion_samples_ : 1;
     Counters counters;
     RasterStats raster_stats;
     out.texture = Image(W, H);
-    if (dispersive) out.texture_rgb = Image(W, H, 3);
-    const auto weights = dispersive ? spectral_weights(samples) : std::vector<std::array<float, 3>>{};
-    for (int k = 0; k < samples; ++k) {
-        const double ior = material.ior + (dispersive ? material.dispersion * (k + 0.5) / samples : 0.0);
-        clock.reset();
-        const Counters c = refract_vertices(frame, map, W, H, ior, absorption, light_dir, true);
-        counters.lost += c.lost;
-        triangle_values(map, scale, counters);
-        refract_ms += clock.ms();
-
-        clock.reset();
-        Image& target = dispersive ? sample_map_ : out.texture;
-        if (dispersive) {
-            if (sample_map_.width != W || sample_map_.height != H) sample_map_ = Image(W, H);
-        }
-        const RasterStats s = raster_.draw({image_, triangles_, values_, {}}, {coverage_, true, false}, target);
-        raster_stats.nonfinite += s.nonfinite;
-        raster_stats.too_large += s.too_large;
-        if (dispersive) {
-            add_spectral_sample(sample_map_, 1.0f / samples, weights[static_cast<std::size_t>(k)], out.texture,
-                                out.texture_rgb);
-        }
-        raster_ms += clock.ms();
-    }
+    if (material.dispersion > 0.0) out.texture_rgb = Image(W, H, 3);
+    draw_dispersion_samples(frame, map, W, H, scale, true, out.texture, out.texture_rgb, counters, raster_stats,
+                            refract_ms, raster_ms);
     out.stages_ms.emplace_back("texture_refract", refract_ms);
     out.stages_ms.emplace_back("texture_raster", raster_ms);
     out.health.add("lost_samples", counters.lost);
@@ -429,9 +451,7 @@ CausticOutput CausticTriangles::render(const FrameGeometry& frame, const RenderR
     const ReceiverChart* chart = request.receiver;
     if (!chart) throw std::invalid_argument("caustic_triangles: needs the receiver chart (camera lookups read it)");
 
-    const ObjectInstance* water = nullptr;
-    for (const ObjectInstance& o : frame.objects)
-        if (o.heightfield && o.object->material.type == MaterialType::Dielectric) water = &o;
+    const ObjectInstance* water = water_surface(frame);
     const Material& material = water->object->material;
     const glm::dvec3 light_dir = glm::normalize(scene.lights[0].direction);
     const int W = chart->width(), H = chart->height();
@@ -442,38 +462,14 @@ CausticOutput CausticTriangles::render(const FrameGeometry& frame, const RenderR
     compute_triangle_flux(light_dir, scene.lights[0].irradiance);
     const ChartMap map(*chart, frame);
     const double scale = map.plane ? 1.0 / chart->bin_area(0, 0) : 1.0;
-    const double absorption = absorption_ ? material.absorption : 0.0;
     double refract_ms = clock.ms(), raster_ms = 0.0;
-
     const bool dispersive = material.dispersion > 0.0;
-    const int samples = dispersive ? dispersion_samples_ : 1;
     Counters counters;
     RasterStats raster_stats;
     out.receiver = Image(W, H);
     if (dispersive) out.receiver_rgb = Image(W, H, 3);
-    const auto weights = dispersive ? spectral_weights(samples) : std::vector<std::array<float, 3>>{};
-    for (int k = 0; k < samples; ++k) {
-        // Midpoint rule over [ior, ior + dispersion]: the mean of the samples estimates the reference's
-        // uniform average over that range.
-        const double ior = material.ior + (dispersive ? material.dispersion * (k + 0.5) / samples : 0.0);
-        clock.reset();
-        const Counters c = refract_vertices(frame, map, W, H, ior, absorption, light_dir);
-        counters.lost += c.lost;
-        counters.not_converged += c.not_converged;
-        triangle_values(map, scale, counters);
-        refract_ms += clock.ms();
-
-        clock.reset();
-        Image& target = dispersive ? sample_map_ : out.receiver;
-        if (dispersive && (sample_map_.width != W || sample_map_.height != H)) sample_map_ = Image(W, H);
-        const RasterStats s = raster_.draw({image_, triangles_, values_, {}}, {coverage_, false, false}, target);
-        raster_stats.nonfinite += s.nonfinite;
-        if (dispersive) {
-            add_spectral_sample(sample_map_, 1.0f / samples, weights[static_cast<std::size_t>(k)], out.receiver,
-                                out.receiver_rgb);
-        }
-        raster_ms += clock.ms();
-    }
+    draw_dispersion_samples(frame, map, W, H, scale, false, out.receiver, out.receiver_rgb, counters, raster_stats,
+                            refract_ms, raster_ms);
     if (!map.plane) {   // height-field receiver: flux per bin -> irradiance by each bin's surface area
         clock.reset();
         tbb::parallel_for(tbb::blocked_range<int>(0, H, 16), [&](const tbb::blocked_range<int>& rows) {
