@@ -16,6 +16,7 @@
 #include "receiver_chart.hpp"
 #include "registry.hpp"
 #include "scene.hpp"
+#include "water_scene.hpp"
 
 namespace {
 
@@ -27,35 +28,14 @@ int bench_threads() {
 }
 
 Scene sine_scene(bool tilted) {
-    Scene scene;
-    scene.path = "bench_wave_optics";
-    scene.name = "sine";
-    Light light;
-    light.direction = {0.0, 0.0, -1.0};
-    scene.lights.push_back(light);
-    Object water;
-    water.name = "water";
-    water.shape = ShapeType::HeightField;
-    water.material.type = MaterialType::Dielectric;
-    water.material.ior = 1.33;
-    water.heightfield.size = {2.0, 2.0};
-    water.heightfield.resolution = {1024, 1024};
-    water.heightfield.generator = HeightGenerator::Sine;
-    water.heightfield.amplitude = 0.01;
-    water.heightfield.wavelength = 0.25;
-    scene.objects.push_back(water);
-    Object floor;
-    floor.name = "floor";
-    floor.shape = ShapeType::Plane;
-    floor.center = {0.0, 0.0, -0.4};
-    floor.u = {1.0, 0.0, tilted ? 0.4 : 0.0};
-    floor.v = {0.0, 1.0, 0.0};
-    floor.material.type = MaterialType::Diffuse;
-    scene.objects.push_back(floor);
-    scene.receiver.object = "floor";
-    scene.receiver.object_index = 1;
-    scene.receiver.width = scene.receiver.height = 256;
-    return scene;
+    WaterOverFloor d;
+    d.name = "bench_wave_optics";
+    d.water_resolution = 1024;
+    d.generator = HeightGenerator::Sine;
+    d.amplitude = 0.01;
+    d.floor_u = {1.0, 0.0, tilted ? 0.4 : 0.0};
+    d.receiver_resolution = 256;
+    return make_water_scene(d);
 }
 
 void run(benchmark::State& state, const std::map<std::string, std::string>& overrides, bool tilted) {

@@ -14,6 +14,7 @@
 #include "receiver_chart.hpp"
 #include "reference.hpp"
 #include "registry.hpp"
+#include "water_scene.hpp"
 
 using namespace caustics;
 
@@ -37,38 +38,21 @@ CausticOutput render(const Scene& scene, const std::map<std::string, std::string
 
 // Flat water 2 m x 2 m at z = 0 over a 1 m x 1 m floor 0.4 m below (plane or flat height field).
 Scene flat_water_scene(glm::dvec3 light_dir, bool fresnel, double absorption, double dispersion, bool heightfield_floor) {
-    Scene s;
-    s.name = "flat";
-    Light light;
-    light.type = LightType::Directional;
-    light.direction = glm::normalize(light_dir);
-    light.irradiance = 2.0;
-    s.lights.push_back(light);
-    Object water;
-    water.name = "water";
-    water.shape = ShapeType::HeightField;
-    water.material.type = MaterialType::Dielectric;
-    water.material.ior = 1.33;
-    water.material.absorption = absorption;
-    water.material.dispersion = dispersion;
-    water.heightfield.size = {2.0, 2.0};
-    water.heightfield.resolution = {64, 64};
-    water.heightfield.generator = HeightGenerator::Flat;
-    Object floor;
-    floor.name = "floor";
-    floor.material.type = MaterialType::Diffuse;
+    WaterOverFloor d;
+    d.name = "flat";
+    d.light_direction = light_dir;
+    d.irradiance = 2.0;
+    d.absorption = absorption;
+    d.dispersion = dispersion;
+    Scene s = make_water_scene(d);
     if (heightfield_floor) {
+        Object& floor = s.objects[1];
         floor.shape = ShapeType::HeightField;
         floor.heightfield.size = {1.0, 1.0};
         floor.heightfield.resolution = {32, 32};
         floor.heightfield.base_height = -0.4;
         floor.heightfield.generator = HeightGenerator::Flat;
-    } else {
-        floor.shape = ShapeType::Plane;
-        floor.center = {0.0, 0.0, -0.4};
     }
-    s.objects = {water, floor};
-    s.receiver = {"floor", 1, 64, 64};
     s.fresnel = fresnel;
     return s;
 }

@@ -21,6 +21,7 @@
 #include "reference.hpp"
 #include "registry.hpp"
 #include "scene.hpp"
+#include "water_scene.hpp"
 
 namespace caustics {
 namespace {
@@ -253,39 +254,17 @@ TEST(WavePropagator, TalbotSelfImagingWithFresnel) {
 
 Scene water_scene(HeightGenerator gen, double amplitude, double floor_z, glm::dvec3 light_dir,
                   int receiver_res, double floor_size = 2.0) {
-    Scene scene;
-    scene.path = "test_wave_optics";
-    scene.name = "test";
-    Light light;
-    light.type = LightType::Directional;
-    light.direction = glm::normalize(light_dir);
-    light.irradiance = 1.0;
-    scene.lights.push_back(light);
-    Object water;
-    water.name = "water";
-    water.shape = ShapeType::HeightField;
-    water.material.type = MaterialType::Dielectric;
-    water.material.ior = 1.33;
-    water.heightfield.center = {0.0, 0.0};
-    water.heightfield.size = {2.0, 2.0};
-    water.heightfield.resolution = {256, 256};
-    water.heightfield.generator = gen;
-    water.heightfield.amplitude = amplitude;
-    water.heightfield.wavelength = 0.25;
-    water.heightfield.direction = {1.0, 0.0};
-    scene.objects.push_back(water);
-    Object floor;
-    floor.name = "floor";
-    floor.shape = ShapeType::Plane;
-    floor.center = {0.0, 0.0, floor_z};
-    floor.u = {floor_size, 0.0, 0.0};
-    floor.v = {0.0, floor_size, 0.0};
-    floor.material.type = MaterialType::Diffuse;
-    scene.objects.push_back(floor);
-    scene.receiver.object = "floor";
-    scene.receiver.object_index = 1;
-    scene.receiver.width = scene.receiver.height = receiver_res;
-    return scene;
+    WaterOverFloor d;
+    d.name = "test_wave_optics";
+    d.light_direction = light_dir;
+    d.water_resolution = 256;
+    d.generator = gen;
+    d.amplitude = amplitude;
+    d.floor_z = floor_z;
+    d.floor_u = {floor_size, 0.0, 0.0};
+    d.floor_v = {0.0, floor_size, 0.0};
+    d.receiver_resolution = receiver_res;
+    return make_water_scene(d);
 }
 
 std::unique_ptr<Method> make_method(const std::map<std::string, std::string>& overrides) {
