@@ -21,12 +21,8 @@ using nlohmann::json;
 
 namespace {
 
-struct Result {
-    int code = -1;
-    std::string out, err;
-};
-
-using caustics::test_support::quote;
+using Result = caustics::test_support::ProgramResult;
+using caustics::test_support::run_program;
 using caustics::test_support::slurp;
 
 class CliTest : public ::testing::Test {
@@ -42,18 +38,7 @@ protected:
         if (!HasFailure()) fs::remove_all(dir_);
     }
 
-    Result run(const std::vector<std::string>& args) {
-        std::string cmd = quote(CAUSTICS_BINARY);
-        for (const auto& a : args) cmd.append(" ").append(quote(a));
-        const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
-        cmd.append(" >").append(quote(out.string())).append(" 2>").append(quote(err.string()));
-        const int status = std::system(cmd.c_str());
-        Result r;
-        r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-        r.out = slurp(out);
-        r.err = slurp(err);
-        return r;
-    }
+    Result run(const std::vector<std::string>& args) { return run_program(CAUSTICS_BINARY, args, dir_); }
 
     // A small, valid scene: sine water over a diffuse floor receiver, directional light.
     static json base_scene() {

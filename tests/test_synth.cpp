@@ -29,7 +29,7 @@ using namespace caustics;
 
 namespace {
 
-using caustics::test_support::quote;
+using caustics::test_support::run_program;
 using caustics::test_support::slurp;
 
 fs::path source_scene(const std::string& name) { return fs::path(CAUSTICS_SOURCE_DIR) / "scenes" / (name + ".json"); }
@@ -55,22 +55,8 @@ protected:
         return p.string();
     }
 
-    struct Result {
-        int code = -1;
-        std::string out, err;
-    };
-    Result run(const std::vector<std::string>& args) {
-        std::string cmd = quote(CAUSTICS_BINARY);
-        for (const auto& a : args) cmd.append(" ").append(quote(a));
-        const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
-        cmd.append(" >").append(quote(out.string())).append(" 2>").append(quote(err.string()));
-        const int status = std::system(cmd.c_str());
-        Result r;
-        r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-        r.out = slurp(out);
-        r.err = slurp(err);
-        return r;
-    }
+    using Result = test_support::ProgramResult;
+    Result run(const std::vector<std::string>& args) { return run_program(CAUSTICS_BINARY, args, dir_); }
 
     fs::path dir_;
 };
