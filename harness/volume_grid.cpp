@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 
 #include <chrono>
 #include <limits>
@@ -218,26 +219,33 @@ glm::dvec3 closest_on_triangle(const glm::dvec3& p, const glm::dvec3& a, const g
     return a + ab * (vb * denom) + ac * (vc * denom);
 }
 
-// Squared distance from p to the two triangles of height-field cell (a, b) (extended past the edge).
-double cell_distance2(const HeightField& hf, int a, int b, const glm::dvec3& p) {
-    auto vertex = [&](int i, int j) {
-        return glm::dvec3(hf.origin.x + i * hf.spacing.x, hf.origin.y + j * hf.spacing.y,
-                          extended_vertex_height(hf, i, j));
-    };
-    const glm::dvec3 v00 = vertex(a, b), v10 = vertex(a + 1, b), v01 = vertex(a, b + 1), v11 = vertex(a + 1, b + 1);
+// min(best, squared distance from p to the two triangles of height-field cell (a, b)), extended past
+// the edge. The triangles lie in the box over the cell's rectangle between its lowest and highest
+// vertex; when that box is no nearer than `best`, the triangles are not visited.
+double cell_distance2(const HeightField& hf, int a, int b, const glm::dvec3& p, double best) {
+    const double x0 = hf.origin.x + a * hf.spacing.x, y0 = hf.origin.y + b * hf.spacing.y;
+    const double x1 = hf.origin.x + (a + 1) * hf.spacing.x, y1 = hf.origin.y + (b + 1) * hf.spacing.y;
+    const double dx = std::max(0.0, std::max(x0 - p.x, p.x - x1)), dy = std::max(0.0, std::max(y0 - p.y, p.y - y1));
+    const double horizontal = dx * dx + dy * dy;
+    if (horizontal >= best) return best;
+    double z00, z10, z01, z11;
+    if (a >= 0 && b >= 0 && a + 1 < hf.nx && b + 1 < hf.ny) {
+        z00 = hf.z(a, b), z10 = hf.z(a + 1, b), z01 = hf.z(a, b + 1), z11 = hf.z(a + 1, b + 1);
+    } else {
+        z00 = extended_vertex_height(hf, a, b), z10 = extended_vertex_height(hf, a + 1, b);
+        z01 = extended_vertex_height(hf, a, b + 1), z11 = extended_vertex_height(hf, a + 1, b + 1);
+    }
+    const double zlo = std::min(std::min(z00, z10), std::min(z01, z11)), zhi = std::max(std::max(z00, z10), std::max(z01, z11));
+    const double dz = std::max(0.0, std::max(zlo - p.z, p.z - zhi));
+    if (horizontal + dz * dz >= best) return best;
+    const glm::dvec3 v00(x0, y0, z00), v10(x1, y0, z10), v01(x0, y1, z01), v11(x1, y1, z11);
     const glm::dvec3 q1 = closest_on_triangle(p, v00, v10, v11) - p;
     const glm::dvec3 q2 = closest_on_triangle(p, v00, v11, v01) - p;
-    return std::min(glm::dot(q1, q1), glm::dot(q2, q2));
+    return std::min(best, std::min(glm::dot(q1, q1), glm::dot(q2, q2)));
 }
 
-double window_distance2(const HeightField& hf, double x, double y, int radius, const glm::dvec3& p) {
-    const int ca = static_cast<int>(std::floor((x - hf.origin.x) / hf.spacing.x));
-    const int cb = static_cast<int>(std::floor((y - hf.origin.y) / hf.spacing.y));
-    double best = std::numeric_limits<double>::infinity();
-    for (int b = cb - radius; b <= cb + radius; ++b)
-        for (int a = ca - radius; a <= ca + radius; ++a) best = std::min(best, cell_distance2(hf, a, b, p));
-    return best;
-}
+// Height-field cell containing coordinate x along one axis (may lie outside the rectangle).
+inline int cell_of(double x, double origin, double spacing) { return static_cast<int>(std::floor((x - origin) / spacing)); }
 
 }  // namespace
 
@@ -259,7 +267,18 @@ double signed_distance_to_interface(const HeightField& hf, const glm::dvec3& p) 
         q = next;
         if (done) break;
     }
-    double d2 = std::min(window_distance2(hf, q.x, q.y, 2, p), window_distance2(hf, p.x, p.y, 1, p));
+    // Exact over the cells within two of the foot point's cell and one of p's own cell. The foot point's
+    // cell goes first so the bound skips most of the others without changing the minimum.
+    const int qa = cell_of(q.x, hf.origin.x, hf.spacing.x), qb = cell_of(q.y, hf.origin.y, hf.spacing.y);
+    const int pa = cell_of(p.x, hf.origin.x, hf.spacing.x), pb = cell_of(p.y, hf.origin.y, hf.spacing.y);
+    double d2 = cell_distance2(hf, qa, qb, p, std::numeric_limits<double>::infinity());
+    auto visit = [&](int a, int b) { d2 = cell_distance2(hf, a, b, p, d2); };
+    for (int b = qb - 2; b <= qb + 2; ++b)
+        for (int a = qa - 2; a <= qa + 2; ++a)
+            if (a != qa || b != qb) visit(a, b);
+    for (int b = pb - 1; b <= pb + 1; ++b)
+        for (int a = pa - 1; a <= pa + 1; ++a)
+            if (std::abs(a - qa) > 2 || std::abs(b - qb) > 2) visit(a, b);
     const double d = std::min(std::sqrt(d2), std::fabs(gap));
     return gap > 0.0 ? -d : d;
 }

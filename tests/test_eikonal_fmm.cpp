@@ -7,6 +7,8 @@
 #include <cstdio>
 #include <functional>
 
+#include <tbb/global_control.h>
+
 #include "../methods/eikonal_fmm/eikonal_solver.hpp"
 #include "errors.hpp"
 #include "frame.hpp"
@@ -127,32 +129,50 @@ TEST(EikonalSolver, SphericalCapCurvatureIsMinusTwoOverR) {
 }
 
 TEST(EikonalSolver, ConvergenceOrderOnSmoothFront) {
-    // Max error of phi over a central region the domain sides cannot influence, at h and h/2.
-    auto error_at = [](int n, const eikonal::Options& o) {
+    // Max error of phi over a central region the domain sides cannot influence (|x|, |y| <= 0.1,
+    // depth s in [0, 0.3]), at h and h/2, compared at the same points: the coarse grid's cell centres.
+    // Each is the common corner of eight fine cells, and the fine error there is their mean (the error
+    // field is smooth, so this adds O(h^2) to an O(h) or O(h^2) error). Comparing the two grids' own
+    // cell centres instead measured 0.68 for order 1: its error is largest at the region's deepest,
+    // most oblique corner (|x| = |y| = 0.1, s = 0.3; not in the initialization band, where it is 20x
+    // smaller), growing linearly with depth and obliqueness, and the coarse grid's outermost centres sit
+    // at |x| = 0.084 while the fine grid's sit at 0.098, so the two maxima came from different points
+    // (own centres at 64 -> 128 -> 256 give 1.01 and 0.96).
+    auto solve_cap = [](int n, const eikonal::Options& o) {
         const HeightField hf = cap_field(512);
-        const VolumeShape shape = make_shape(-0.3, 0.6, n, 0.05, 0.4);
         eikonal::Stats stats;
-        const VolumeD phi = eikonal::solve(hf, shape, o, stats);
-        double err = 0.0;
-        for (int k = 0; k < shape.nz; ++k)
-            for (int j = 0; j < shape.ny; ++j)
-                for (int i = 0; i < shape.nx; ++i) {
-                    const glm::dvec3 p = shape.center(i, j, k);
-                    const double s = cap_distance(p);
-                    if (std::fabs(p.x) > 0.1 || std::fabs(p.y) > 0.1 || s < 0.0 || s > 0.3) continue;
-                    err = std::max(err, std::fabs(phi.at(i, j, k) - s));
-                }
-        return err;
+        return eikonal::solve(hf, make_shape(-0.3, 0.6, n, 0.05, 0.4), o, stats);
+    };
+    auto in_region = [](const glm::dvec3& p) {
+        const double s = cap_distance(p);
+        return std::fabs(p.x) <= 0.1 && std::fabs(p.y) <= 0.1 && s >= 0.0 && s <= 0.3;
     };
     for (const Variant& v : kVariants) {
         const eikonal::Options o = options(v.solver, v.order, eikonal::Boundary::None);
-        const double e1 = error_at(32, o), e2 = error_at(64, o);
+        const VolumeD coarse = solve_cap(32, o), fine = solve_cap(64, o);
+        const VolumeShape& cs = coarse.shape;
+        const VolumeShape& fs = fine.shape;
+        auto fine_error = [&](int i, int j, int k) { return fine.at(i, j, k) - cap_distance(fs.center(i, j, k)); };
+        double e1 = 0.0, e2 = 0.0;
+        for (int k = 0; k < cs.nz; ++k)
+            for (int j = 0; j < cs.ny; ++j)
+                for (int i = 0; i < cs.nx; ++i) {
+                    const glm::dvec3 p = cs.center(i, j, k);
+                    if (!in_region(p)) continue;
+                    e1 = std::max(e1, std::fabs(coarse.at(i, j, k) - cap_distance(p)));
+                    // Both grids share their top face: coarse layer k (counted from the top) covers fine
+                    // layers 2k and 2k + 1 from the top.
+                    const int kf = fs.nz - 2 * (cs.nz - k);
+                    ASSERT_GE(kf, 0);
+                    double mean = 0.0;
+                    for (int c = 0; c < 8; ++c) mean += fine_error(2 * i + (c & 1), 2 * j + ((c >> 1) & 1), kf + (c >> 2));
+                    e2 = std::max(e2, std::fabs(mean / 8.0));
+                }
         const double order = std::log2(e1 / e2);
         std::printf("convergence %s: err(32) = %.3g err(64) = %.3g order = %.2f\n", v.name, e1, e2, order);
         if (v.order == 1) {
-            // First-order fast marching converges like h |log h| in the max norm before its asymptote.
-            EXPECT_GT(order, 0.6) << v.name;
-            EXPECT_LT(order, 1.4) << v.name;
+            EXPECT_GE(order, 0.8) << v.name;
+            EXPECT_LE(order, 1.2) << v.name;
         } else {
             EXPECT_GT(order, 1.5) << v.name;
         }
@@ -234,8 +254,54 @@ TEST(EikonalSolver, GaussianFocusFollowsTwoOverRMinusS) {
                     "s = %.4f, R = %.4f, (s - R) / h = %.2f\n", v.name, v.order == 1 ? " / (h/(R-s))" : "", worst, onset, R, (onset - R) / h);
         EXPECT_LT(worst, v.order == 1 ? 10.0 : 0.1) << v.name;
         EXPECT_GT(onset, 0.0) << v.name;
-        // Second order: within two cells of R; first order smooths the focus a little more (three).
+        // Second order: within two cells of R. First order reaches the threshold 2.2 cells past R: on the
+        // axis the front's lateral slope changes sign, and its one-sided lateral differences (h / (R - s)
+        // instead of 0) slow the front there, which smooths the focus into a ramp (|Laplacian| h = 0.48
+        // at R, 0.51 at R + 2.2 h). The 7-point Laplacian of the exact distance (to the triangulated
+        // bump) reaches it 0.9 cells before R. The threshold onset is a check at this h only: it moves
+        // with h (h = 1/64: order 1 -0.1, order 2 -2.1 cells; h = 1/256: 6.9 and 3.9 cells, with a
+        // 1024^2 height field).
         EXPECT_LE(std::fabs(onset - R), (v.order == 2 ? 2.0 : 3.0) * h) << v.name;
+    }
+}
+
+TEST(EikonalSolver, SweepReachesTheFastMarchingSolution) {
+    // First order, both solvers solve the same upwind equations (fronts under a height field move
+    // down, so the layer-by-layer sweep loses nothing): fast marching exactly, the sweep up to its
+    // stopping rule, which leaves each cell within 1e-7 h of its update; allow that per layer.
+    const HeightField hf = make_field(
+        -0.5, 1.0, 128, [](double x, double y) { return 0.03 * std::sin(9.0 * x + 1.0) * std::cos(7.0 * y); },
+        [](double x, double y) {
+            return glm::dvec2(0.27 * std::cos(9.0 * x + 1.0) * std::cos(7.0 * y), -0.21 * std::sin(9.0 * x + 1.0) * std::sin(7.0 * y));
+        });
+    const VolumeShape shape = make_shape(-0.5, 1.0, 40, 0.1, 0.8);
+    eikonal::Stats fmm_stats, sweep_stats;
+    const VolumeD fmm = eikonal::solve(hf, shape, options(eikonal::Solver::Fmm, 1), fmm_stats);
+    const VolumeD sweep = eikonal::solve(hf, shape, options(eikonal::Solver::Sweep, 1), sweep_stats);
+    double worst = 0.0;
+    for (std::size_t c = 0; c < fmm.data.size(); ++c) worst = std::max(worst, std::fabs(fmm.data[c] - sweep.data[c]));
+    std::printf("sweep vs fast marching (order 1): max |difference| = %.3g h\n", worst / shape.spacing);
+    EXPECT_LE(worst, shape.nz * 1e-7 * shape.spacing);
+    EXPECT_EQ(sweep_stats.not_converged, 0);
+}
+
+TEST(EikonalSolver, SameSolutionOnOneAndTwoThreads) {
+    // Initialization, the side faces of Algorithm 2 and the passes over the grid run in parallel;
+    // every cell's value must not depend on how the work was split.
+    const HeightField hf = make_field(
+        -0.5, 1.0, 96, [](double x, double y) { return 0.02 * std::sin(11.0 * x + 5.0 * y); },
+        [](double x, double y) { return glm::dvec2(0.22, 0.1) * std::cos(11.0 * x + 5.0 * y); });
+    const VolumeShape shape = make_shape(-0.5, 1.0, 32, 0.1, 0.6);
+    for (const Variant& v : kVariants) {
+        VolumeD phi[2];
+        for (int threads : {1, 2}) {
+            tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+            eikonal::Stats stats;
+            phi[threads - 1] = eikonal::solve(hf, shape, options(v.solver, v.order), stats);
+        }
+        std::size_t differ = 0;
+        for (std::size_t c = 0; c < phi[0].data.size(); ++c) differ += phi[0].data[c] != phi[1].data[c];
+        EXPECT_EQ(differ, 0u) << v.name;
     }
 }
 
@@ -357,4 +423,29 @@ TEST(EikonalMethod, HardCasesStayFinite) {
     // A 4^3 grid.
     for (const char* solver : {"fmm", "sweep"})
         render_ok(water_scene(sine_desc(0.01, 0.25), -0.4, 1.0), {{"grid", "4"}, {"solver", solver}}, "grid 4");
+}
+
+TEST(EikonalMethod, TextureDoesNotDependOnThreadCount) {
+    // The whole update (solve, curvature, a * c^b, dissipation) through the plugin, read back raw.
+    const Scene scene = water_scene(sine_desc(0.02, 0.3), -0.4, 1.0);
+    const FrameGeometry frame = build_frame_geometry(scene, 0);
+    ReceiverChart chart(frame, scene.receiver.width, scene.receiver.height);
+    RenderRequest request{&chart, nullptr};
+    for (const char* solver : {"fmm", "sweep"}) {
+        Image maps[2];
+        for (int threads : {1, 2}) {
+            tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+            const MethodInfo& info = require_method("eikonal_fmm");
+            auto method = info.create(ParamSet::resolve(
+                info.name, info.params,
+                {{"grid", "40"}, {"solver", solver}, {"iterations", "4"}, {"threshold_height", "0.1"}, {"b", "1.5"}, {"normalize", "raw"}}));
+            method->prepare(scene);
+            method->update(frame);
+            maps[threads - 1] = method->render(frame, request).receiver;
+        }
+        ASSERT_EQ(maps[0].pixels.size(), maps[1].pixels.size()) << solver;
+        std::size_t differ = 0;
+        for (std::size_t p = 0; p < maps[0].pixels.size(); ++p) differ += maps[0].pixels[p] != maps[1].pixels[p];
+        EXPECT_EQ(differ, 0u) << solver;
+    }
 }

@@ -45,7 +45,8 @@ void dissipate_below(VolumeF& tex, int threshold_layer, int steps, std::int64_t&
     for (int k = std::min(threshold_layer, s.nz) - 1; k >= 0; --k) {
         std::copy_n(tex.data.begin() + static_cast<std::ptrdiff_t>((k + 1) * layer), layer, a.begin());
         for (int step = 0; step < steps; ++step) {
-            for (int j = 0; j < s.ny; ++j)
+            // Explicit steps: every cell reads only the previous step, so rows run in parallel.
+            tbb::parallel_for(0, s.ny, [&](int j) {
                 for (int i = 0; i < s.nx; ++i) {
                     const std::size_t c = static_cast<std::size_t>(j) * s.nx + i;
                     const float v = a[c];
@@ -54,6 +55,7 @@ void dissipate_below(VolumeF& tex, int threshold_layer, int steps, std::int64_t&
                     const float d = j > 0 ? a[c - s.nx] : v, u = j + 1 < s.ny ? a[c + s.nx] : v;
                     b[c] = v + 0.2f * (l + r + d + u - 4.0f * v);
                 }
+            });
             std::swap(a, b);
         }
         for (float& v : a)
@@ -97,28 +99,30 @@ public:
         const HeightField& hf = *water->heightfield;
         const VolumeShape shape = caustic_volume(frame, *water, grid_, embed_ ? embed_margin_ : 0.0);
         eikonal::Stats stats;
-        const VolumeD phi = eikonal::solve(hf, shape, options_, stats);
+        const VolumeD& phi = eikonal::solve(hf, shape, options_, stats, workspace_);
         stages_.emplace_back("init", stats.init_ms);
         stages_.emplace_back("boundary", stats.boundary_ms);
         stages_.emplace_back("solve", stats.solve_ms);
 
         auto t0 = std::chrono::steady_clock::now();
         laplacian(phi, texture_);  // Eq. 3-4: curvature of the eikonal solution
-        std::int64_t nonfinite = 0;
         const bool linear = b_ == 1.0;
+        std::vector<std::int64_t> layer_nonfinite(static_cast<std::size_t>(shape.nz));
         tbb::parallel_for(0, shape.nz, [&](int k) {
             const std::size_t begin = shape.index(0, 0, k), end = begin + static_cast<std::size_t>(shape.nx) * shape.ny;
             for (std::size_t c = begin; c < end; ++c) {
                 // Converging fronts (caustics) have negative curvature; air cells carry no light.
                 const double conv = phi.data[c] > 0.0 ? std::max(0.0, -static_cast<double>(texture_.data[c])) : 0.0;
-                texture_.data[c] = static_cast<float>(a_ * (linear ? conv : std::pow(conv, b_)));
+                float v = static_cast<float>(a_ * (linear ? conv : std::pow(conv, b_)));
+                if (!std::isfinite(v)) {
+                    ++layer_nonfinite[static_cast<std::size_t>(k)];
+                    v = 0.0f;
+                }
+                texture_.data[c] = v;
             }
         });
-        for (float& v : texture_.data)
-            if (!std::isfinite(v)) {
-                ++nonfinite;
-                v = 0.0f;
-            }
+        std::int64_t nonfinite = 0;
+        for (std::int64_t n : layer_nonfinite) nonfinite += n;
         stages_.emplace_back("curvature", ms_since(t0));
 
         // Viscosity post-process (Sec. 3.3) below the threshold height under the mean interface.
@@ -161,6 +165,7 @@ private:
     double threshold_height_, embed_margin_, a_, b_;
     bool scaled_ior_, normalize_flux_, embed_;
     eikonal::Options options_;
+    eikonal::Workspace workspace_;  // the eikonal solution; its storage is reused by the next update
     VolumeF texture_;
     double ior_ = 1.33, surface_z_ = 0.0;
     Health health_;

@@ -1,27 +1,26 @@
 // Eikonal solvers for Mercier's 3-D caustic texture (Mercier 2013, Sec. 3, Algorithms 1 and 2).
 #include "eikonal_solver.hpp"
+#include "eikonal_update.hpp"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <utility>
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 namespace caustics::eikonal {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+using detail::AxisTerm;
+using detail::kInf;
 
 double ms_since(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
-
-struct AxisTerm {
-    double v1;     // nearest upwind neighbour
-    double alpha;  // 1 (first order) or 9/4 (second order)
-    double b;      // phi_1 or (4 phi_1 - phi_2) / 3
-};
 
 // Upwind update of cell c: solves sum_a alpha_a (phi - b_a)^2 = (F h)^2 over the axes with a usable
 // neighbour (Sethian 1996; second order after Rickett & Fomel 2000: one-sided 3-point differences
@@ -60,26 +59,7 @@ inline double local_update(const double* phi, const Usable& usable, const Volume
         }
         t[m++] = term;
     }
-    if (m == 0) return kInf;
-    // Sort the (at most three) terms by their nearest neighbour.
-    if (m > 1 && t[1].v1 < t[0].v1) std::swap(t[0], t[1]);
-    if (m > 2 && t[2].v1 < t[1].v1) {
-        std::swap(t[1], t[2]);
-        if (t[1].v1 < t[0].v1) std::swap(t[0], t[1]);
-    }
-    for (int use = m; use >= 2; --use) {
-        double A = 0.0, B = 0.0, C = -fh * fh;
-        for (int q = 0; q < use; ++q) {
-            A += t[q].alpha;
-            B += t[q].alpha * t[q].b;
-            C += t[q].alpha * t[q].b * t[q].b;
-        }
-        const double disc = B * B - A * C;
-        if (disc < 0.0) continue;
-        const double x = (B + std::sqrt(disc)) / A;
-        if (x >= t[use - 1].v1) return x;
-    }
-    return t[0].b + fh / std::sqrt(t[0].alpha);
+    return detail::solve_terms(t, m, fh);
 }
 
 template <class F>
@@ -149,42 +129,6 @@ void march(Field& f, int order, Stats& stats) {
     }
 }
 
-void sweep_down(Field& f, int order, Stats& stats) {
-    const VolumeShape& s = f.shape;
-    const double h = s.spacing;
-    double* phi = f.phi.data();
-    const std::uint8_t* frozen = f.frozen.data();
-    for (std::size_t c = 0; c < s.size(); ++c)
-        if (!frozen[c]) phi[c] = kInf;
-    auto usable = [&](std::size_t n) { return phi[n] < kInf; };
-    // Changes below 1e-7 h move the Laplacian by < 1e-7 / h: far below any caustic signal.
-    const double tol = 1e-7 * h;
-    constexpr int kMaxPasses = 64;
-    for (int k = s.nz - 1; k >= 0; --k) {
-        bool converged = false;
-        for (int pass = 0; pass < kMaxPasses && !converged; ++pass) {
-            const bool i_up = (pass & 1) == 0, j_up = (pass & 2) == 0;
-            bool changed = false;
-            for (int jj = 0; jj < s.ny; ++jj) {
-                const int j = j_up ? jj : s.ny - 1 - jj;
-                for (int ii = 0; ii < s.nx; ++ii) {
-                    const int i = i_up ? ii : s.nx - 1 - ii;
-                    const std::size_t c = s.index(i, j, k);
-                    if (frozen[c]) continue;
-                    const double fh = (f.cost ? static_cast<double>((*f.cost)[c]) : 1.0) * h;
-                    const double v = local_update(phi, usable, s, i, j, k, c, fh, order);
-                    if (v < phi[c] - tol) {
-                        phi[c] = v;
-                        changed = true;
-                    }
-                }
-            }
-            converged = !changed;
-        }
-        if (!converged) ++stats.not_converged;
-    }
-}
-
 namespace {
 
 // Algorithm 2 (Mercier 2013, Sec. 3.2): solve the side faces of the volume first, with propagation
@@ -214,90 +158,125 @@ void paper_boundary(Field& f, const std::vector<glm::dvec2>& column_gradient, in
                 f.frozen[c] = 1;
             }
         }
-    // 2-D boundaries: the four side faces, each as a grid that is one cell thick.
+    // 2-D boundaries: the four side faces, each as a grid that is one cell thick. They share only the
+    // vertical edges, frozen above, so they are solved in parallel and written back in a fixed order.
+    struct FaceId {
+        int axis, side;
+    };
+    std::vector<FaceId> faces;
     for (int axis = 0; axis < 2; ++axis) {
         const int n_axis = axis == 0 ? s.nx : s.ny;
-        for (int side : {0, n_axis - 1}) {
-            if (side != 0 && n_axis == 1) continue;
-            Field face;
-            face.shape = s;
-            if (axis == 0) face.shape.nx = 1; else face.shape.ny = 1;
-            const VolumeShape& fs = face.shape;
-            face.phi.resize(fs.size());
-            face.frozen.resize(fs.size());
-            std::vector<float> slowness(fs.size());
-            auto full_index = [&](int a, int b, int k) {  // a, b: the face's in-plane horizontal index
-                return axis == 0 ? s.index(side, a, k) : s.index(a, side, k);
-            };
-            const int n_in = axis == 0 ? s.ny : s.nx;
-            for (int k = 0; k < s.nz; ++k)
-                for (int a = 0; a < n_in; ++a) {
-                    const std::size_t c = full_index(a, 0, k);
-                    const std::size_t fc = axis == 0 ? fs.index(0, a, k) : fs.index(a, 0, k);
-                    face.phi[fc] = f.phi[c];
-                    face.frozen[fc] = f.frozen[c];
-                    const glm::dvec3 nrm = axis == 0 ? normal(side, a) : normal(a, side);
-                    const double na = axis == 0 ? nrm.x : nrm.y;
-                    slowness[fc] = static_cast<float>(std::sqrt(std::max(1.0 - na * na, 1e-6)));
-                }
-            // First pass: extend the interface cells' costs over the face at unit cost.
-            face.carry = &slowness;
-            march(face, 1, stats);
-            // Second pass: the face's eikonal solution with those costs.
-            face.carry = nullptr;
-            face.cost = &slowness;
-            march(face, order, stats);
-            for (int k = 0; k < s.nz; ++k)
-                for (int a = 0; a < n_in; ++a) {
-                    const std::size_t c = full_index(a, 0, k);
-                    const std::size_t fc = axis == 0 ? fs.index(0, a, k) : fs.index(a, 0, k);
-                    f.phi[c] = face.phi[fc];
-                    f.frozen[c] = 1;
-                }
-        }
+        for (int side : {0, n_axis - 1})
+            if (side == 0 || n_axis > 1) faces.push_back({axis, side});
+    }
+    std::vector<Field> solved(faces.size());
+    std::vector<Stats> face_stats(faces.size());
+    // Cell (a, k) of a face (a: its in-plane horizontal index) in the full grid.
+    auto full_index = [&](const FaceId& id, int a, int k) {
+        return id.axis == 0 ? s.index(id.side, a, k) : s.index(a, id.side, k);
+    };
+    auto face_index = [](const FaceId& id, const VolumeShape& fs, int a, int k) {
+        return id.axis == 0 ? fs.index(0, a, k) : fs.index(a, 0, k);
+    };
+    tbb::parallel_for(std::size_t{0}, faces.size(), [&](std::size_t q) {
+        const FaceId id = faces[q];
+        Field& face = solved[q];
+        face.shape = s;
+        if (id.axis == 0) face.shape.nx = 1; else face.shape.ny = 1;
+        const VolumeShape& fs = face.shape;
+        face.phi.resize(fs.size());
+        face.frozen.resize(fs.size());
+        std::vector<float> slowness(fs.size());
+        const int n_in = id.axis == 0 ? s.ny : s.nx;
+        for (int k = 0; k < s.nz; ++k)
+            for (int a = 0; a < n_in; ++a) {
+                const std::size_t c = full_index(id, a, k), fc = face_index(id, fs, a, k);
+                face.phi[fc] = f.phi[c];
+                face.frozen[fc] = f.frozen[c];
+                const glm::dvec3 nrm = id.axis == 0 ? normal(id.side, a) : normal(a, id.side);
+                const double na = id.axis == 0 ? nrm.x : nrm.y;
+                slowness[fc] = static_cast<float>(std::sqrt(std::max(1.0 - na * na, 1e-6)));
+            }
+        // First pass: extend the interface cells' costs over the face at unit cost.
+        face.carry = &slowness;
+        march(face, 1, face_stats[q]);
+        // Second pass: the face's eikonal solution with those costs.
+        face.carry = nullptr;
+        face.cost = &slowness;
+        march(face, order, face_stats[q]);
+        face.cost = nullptr;
+    });
+    for (std::size_t q = 0; q < faces.size(); ++q) {
+        const FaceId id = faces[q];
+        const VolumeShape& fs = solved[q].shape;
+        const int n_in = id.axis == 0 ? s.ny : s.nx;
+        for (int k = 0; k < s.nz; ++k)
+            for (int a = 0; a < n_in; ++a) {
+                const std::size_t c = full_index(id, a, k);
+                f.phi[c] = solved[q].phi[face_index(id, fs, a, k)];
+                f.frozen[c] = 1;
+            }
+        stats.not_converged += face_stats[q].not_converged;
+        stats.nonfinite += face_stats[q].nonfinite;
     }
 }
 
 }  // namespace
 
 VolumeD solve(const HeightField& hf, const VolumeShape& shape, const Options& options, Stats& stats) {
+    Workspace ws;
+    solve(hf, shape, options, stats, ws);
+    return std::move(ws.phi);
+}
+
+const VolumeD& solve(const HeightField& hf, const VolumeShape& shape, const Options& options, Stats& stats,
+                     Workspace& ws) {
     auto t0 = std::chrono::steady_clock::now();
     const VolumeShape& s = shape;
     const double h = s.spacing;
     Field f;
     f.shape = s;
-    f.phi.assign(s.size(), kInf);
-    f.frozen.assign(s.size(), 0);
-    // The interface over every column centre.
-    std::vector<double> column_height(static_cast<std::size_t>(s.nx) * s.ny);
+    f.phi.swap(ws.phi.data);
+    f.frozen.swap(ws.frozen);
+    // Every cell is written below: resize only (no fill pass over the whole grid).
+    f.phi.resize(s.size());
+    f.frozen.resize(s.size());
+    // The interface over every column centre, and the slope factor 1 / sqrt(1 + |grad|^2) that turns a
+    // vertical gap into a distance along the normal.
+    std::vector<double> column_height(static_cast<std::size_t>(s.nx) * s.ny), column_slope(column_height.size());
     std::vector<glm::dvec2> column_gradient(column_height.size());
     tbb::parallel_for(0, s.ny, [&](int j) {
         for (int i = 0; i < s.nx; ++i) {
             const glm::dvec3 p = s.center(i, j, 0);
             const std::size_t col = static_cast<std::size_t>(j) * s.nx + i;
             column_height[col] = extended_height(hf, p.x, p.y, &column_gradient[col]);
+            column_slope[col] = 1.0 / std::sqrt(1.0 + glm::dot(column_gradient[col], column_gradient[col]));
         }
     });
     const double band = 2.0 * h;
-    tbb::parallel_for(0, s.nz, [&](int k) {
-        for (int j = 0; j < s.ny; ++j)
-            for (int i = 0; i < s.nx; ++i) {
-                const std::size_t col = static_cast<std::size_t>(j) * s.nx + i;
-                const std::size_t c = s.index(i, j, k);
-                const glm::dvec3 p = s.center(i, j, k);
-                const glm::dvec2 g = column_gradient[col];
-                const double gap = p.z - column_height[col];
-                const double estimate = -gap / std::sqrt(1.0 + glm::dot(g, g));  // > 0 below
-                if (options.init == Init::Triangle && std::fabs(estimate) <= band) {
-                    f.phi[c] = signed_distance_to_interface(hf, p);
-                    f.frozen[c] = 1;
-                } else if (gap > 0.0) {
-                    // Air above the interface: frozen (light enters from the interface only), with an
-                    // approximate signed distance so the Laplacian is smooth across the interface.
-                    f.phi[c] = estimate;
-                    f.frozen[c] = 1;
-                }
+    const bool triangle = options.init == Init::Triangle;
+    // Parallel over rows, not layers: the band of exact distances spans only a few layers.
+    tbb::parallel_for(0, s.nz * s.ny, [&](int row) {
+        const int k = row / s.ny, j = row % s.ny;
+        const double z = s.center(0, 0, k).z;
+        const std::size_t first_col = static_cast<std::size_t>(j) * s.nx, first = s.index(0, j, k);
+        for (int i = 0; i < s.nx; ++i) {
+            const std::size_t col = first_col + i, c = first + i;
+            const double gap = z - column_height[col];
+            const double estimate = -gap * column_slope[col];  // > 0 below
+            if (triangle && std::fabs(estimate) <= band) {
+                f.phi[c] = signed_distance_to_interface(hf, s.center(i, j, k));
+                f.frozen[c] = 1;
+            } else if (gap > 0.0) {
+                // Air above the interface: frozen (light enters from the interface only), with an
+                // approximate signed distance so the Laplacian is smooth across the interface.
+                f.phi[c] = estimate;
+                f.frozen[c] = 1;
+            } else {
+                f.phi[c] = kInf;
+                f.frozen[c] = 0;
             }
+        }
     });
     if (options.init == Init::Vertex) {
         // Mercier 2013, Algorithm 1: each interface vertex sets its cell to its distance to the centre.
@@ -325,19 +304,35 @@ VolumeD solve(const HeightField& hf, const VolumeShape& shape, const Options& op
     if (options.solver == Solver::Fmm) march(f, options.order, stats);
     else sweep_down(f, options.order, stats);
     // Cells no front reached (none in a connected grid) take the largest finite value; counted.
-    double largest = 0.0;
-    for (double v : f.phi)
-        if (std::isfinite(v)) largest = std::max(largest, v);
-    for (double& v : f.phi)
-        if (!std::isfinite(v)) {
-            ++stats.not_converged;
-            v = largest;
-        }
+    const std::size_t layer = static_cast<std::size_t>(s.nx) * s.ny;
+    auto layer_range = [&](int k) { return std::pair(f.phi.begin() + static_cast<std::ptrdiff_t>(k * layer),
+                                                     f.phi.begin() + static_cast<std::ptrdiff_t>((k + 1) * layer)); };
+    const double largest = tbb::parallel_reduce(
+        tbb::blocked_range<int>(0, s.nz), 0.0,
+        [&](const tbb::blocked_range<int>& r, double m) {
+            for (int k = r.begin(); k < r.end(); ++k) {
+                const auto [b, e] = layer_range(k);
+                for (auto it = b; it != e; ++it)
+                    if (std::isfinite(*it)) m = std::max(m, *it);
+            }
+            return m;
+        },
+        [](double a, double b) { return std::max(a, b); });
+    std::vector<std::int64_t> unreached(static_cast<std::size_t>(s.nz));
+    tbb::parallel_for(0, s.nz, [&](int k) {
+        const auto [b, e] = layer_range(k);
+        for (auto it = b; it != e; ++it)
+            if (!std::isfinite(*it)) {
+                ++unreached[static_cast<std::size_t>(k)];
+                *it = largest;
+            }
+    });
+    for (std::int64_t n : unreached) stats.not_converged += n;
     stats.solve_ms += ms_since(t0);
-    VolumeD out;
-    out.shape = s;
-    out.data = std::move(f.phi);
-    return out;
+    ws.phi.shape = s;
+    ws.phi.data.swap(f.phi);
+    ws.frozen.swap(f.frozen);
+    return ws.phi;
 }
 
 }  // namespace caustics::eikonal

@@ -43,8 +43,18 @@ void march(Field& f, int order, Stats& stats);
 // and on itself; each layer is swept in the four horizontal orderings until it stops changing.
 void sweep_down(Field& f, int order, Stats& stats);
 
+// Storage kept between solves of the same shape (an animation's frames), so a solve neither allocates
+// nor first-touches its grids again.
+struct Workspace {
+    VolumeD phi;
+    std::vector<std::uint8_t> frozen;
+};
+
 // Initializes from the interface (band of signed distances, air above frozen), applies the boundary
 // treatment and solves. phi > 0 in the water, < 0 in the air above the interface.
 VolumeD solve(const HeightField& hf, const VolumeShape& shape, const Options& options, Stats& stats);
+// The same into ws.phi (returned), reusing the workspace's storage.
+const VolumeD& solve(const HeightField& hf, const VolumeShape& shape, const Options& options, Stats& stats,
+                     Workspace& ws);
 
 }  // namespace caustics::eikonal
