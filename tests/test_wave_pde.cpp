@@ -4,11 +4,14 @@
 
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
+
+#include <tbb/task_arena.h>
 
 #include "../methods/wave_pde/wave_solver.hpp"
 #include "errors.hpp"
@@ -87,6 +90,166 @@ TEST(WaveSolver, SpongeReflectsLessThanOnePercent) {
     }
     std::printf("sponge reflection (energy in the box, t = 40..70): %.4g\n", worst);
     EXPECT_LT(worst, 0.01);
+}
+
+namespace {
+
+// A horizontal Gaussian sheet exp(-d^2 / 2) at height `z0` (cells): the smooth interface initial state.
+std::vector<float> sheet(const VolumeShape& s, double z0) {
+    std::vector<float> u(s.size(), 0.0f);
+    for (int k = 0; k < s.nz; ++k)
+        for (int j = 0; j < s.ny; ++j)
+            for (int i = 0; i < s.nx; ++i) {
+                const double d = k - z0 + 0.3 * std::sin(0.7 * i) * std::cos(0.4 * j);
+                if (std::fabs(d) < 3.0) u[s.index(i, j, k)] = static_cast<float>(std::exp(-0.5 * d * d));
+            }
+    return u;
+}
+
+struct SolverRun {
+    std::vector<float> accumulated, field;
+    std::int64_t cells_updated = 0;
+};
+
+SolverRun run_solver(const VolumeShape& s, const wave::Settings& settings, const std::vector<float>& initial, int steps) {
+    wave::Simulation sim(s, settings);
+    sim.set_initial(initial);
+    SolverRun r;
+    r.accumulated.assign(s.size(), 0.0f);
+    for (int n = 0; n < steps; ++n) sim.step(&r.accumulated);
+    sim.flush(&r.accumulated);
+    r.field = sim.current();
+    r.cells_updated = sim.cells_updated();
+    return r;
+}
+
+}  // namespace
+
+TEST(WaveSolver, ResultDoesNotDependOnThreadCount) {
+    VolumeShape s = cube(40);
+    s.nx = 37;  // rows not a multiple of any vector width
+    wave::Settings settings;
+    settings.sponge = 8;
+    for (const bool clamp : {false, true}) {
+        settings.clamp_negative = clamp;
+        const std::vector<float> init = sheet(s, 27.0);
+        SolverRun one, two;
+        tbb::task_arena(1).execute([&] { one = run_solver(s, settings, init, 90); });
+        tbb::task_arena(2).execute([&] { two = run_solver(s, settings, init, 90); });
+        EXPECT_EQ(one.accumulated, two.accumulated) << "clamp " << clamp;
+        EXPECT_EQ(one.field, two.field) << "clamp " << clamp;
+        EXPECT_EQ(one.cells_updated, two.cells_updated) << "clamp " << clamp;
+        // The narrow band skipped work: the sheet had not reached every row yet.
+        EXPECT_LT(one.cells_updated, 90LL * static_cast<std::int64_t>(s.size()));
+    }
+}
+
+TEST(WaveSolver, AccumulatesEveryLevelOnce) {
+    // The solver adds levels in pairs; with flush() the sum is phi^0 + ... + phi^{N-1} for odd and even N.
+    const VolumeShape s = cube(20);
+    wave::Settings settings;
+    settings.sponge = 5;
+    const std::vector<float> init = sheet(s, 12.0);
+    for (const int steps : {1, 7, 8}) {
+        wave::Simulation sim(s, settings);
+        sim.set_initial(init);
+        std::vector<float> paired(s.size(), 0.0f);
+        std::vector<double> direct(s.size(), 0.0);
+        for (int n = 0; n < steps; ++n) {
+            for (std::size_t c = 0; c < s.size(); ++c) direct[c] += sim.current()[c];
+            sim.step(&paired);
+        }
+        sim.flush(&paired);
+        sim.flush(&paired);  // a second flush adds nothing
+        double worst = 0.0;
+        for (std::size_t c = 0; c < s.size(); ++c) worst = std::max(worst, std::fabs(paired[c] - direct[c]));
+        EXPECT_LT(worst, 1e-5) << steps << " steps";
+    }
+}
+
+TEST(WaveSolver, WindowKeepsEachLayersSumUpToItsStop) {
+    // A front moving down: layer k sums phi^n while k <= top(n). The window zeroes the layers above
+    // top(n) + 4; that disturbance moves no faster than the front, so the sums match a run without it.
+    const VolumeShape s = cube(40);
+    wave::Settings settings;
+    settings.sponge = 8;
+    const std::vector<float> init = sheet(s, 30.0);
+    auto top = [](int n) { return static_cast<int>(std::floor(30.0 - 0.5 * n + 6.0)); };
+    wave::Simulation whole(s, settings), window(s, settings);
+    whole.set_initial(init);
+    window.set_initial(init);
+    std::vector<double> direct(s.size(), 0.0);
+    std::vector<float> windowed(s.size(), 0.0f);
+    const std::size_t layer = static_cast<std::size_t>(s.nx) * s.ny;
+    for (int n = 0; top(n) >= 8; ++n) {
+        for (std::size_t c = 0; c < static_cast<std::size_t>(top(n) + 1) * layer; ++c) direct[c] += whole.current()[c];
+        whole.step(nullptr);
+        window.step(&windowed, top(n));
+    }
+    window.flush(&windowed);
+    double worst = 0.0, scale = 0.0;
+    for (std::size_t c = 8 * layer; c < s.size(); ++c) {
+        worst = std::max(worst, std::fabs(windowed[c] - direct[c]));
+        scale = std::max(scale, std::fabs(direct[c]));
+    }
+    std::printf("window vs whole domain: max |dC| %.3g of max |C| %.3g\n", worst, scale);
+    EXPECT_GT(scale, 1.0);
+    EXPECT_LT(worst, 1e-3 * scale);
+    EXPECT_LT(window.cells_updated(), whole.cells_updated());
+}
+
+TEST(WaveSolver, NarrowBandMatchesFullUpdate) {
+    const VolumeShape s = cube(32);
+    wave::Settings band;
+    band.sponge = 8;
+    wave::Settings full = band;
+    full.narrow_band = false;
+    const std::vector<float> init = sheet(s, 22.0);
+    const SolverRun a = run_solver(s, band, init, 120), b = run_solver(s, full, init, 120);
+    double worst = 0.0, scale = 0.0;
+    for (std::size_t c = 0; c < s.size(); ++c) {
+        worst = std::max(worst, std::fabs(double(a.accumulated[c]) - b.accumulated[c]));
+        scale = std::max(scale, std::fabs(double(b.accumulated[c])));
+    }
+    std::printf("narrow band vs full update: max |dC| %.3g of max |C| %.3g\n", worst, scale);
+    EXPECT_LT(worst, 1e-5 * scale);  // only rows below the 1e-7 band threshold were dropped
+    EXPECT_LT(a.cells_updated, b.cells_updated);
+}
+
+TEST(WaveSolver, ConvergedSumIsHarmonicOutsideTheBand) {
+    // Summing the scheme over all steps (phi -> 0): courant^2 L(C) = -s phi^0, s = sigma dt. Where the
+    // band does not damp the initial sheet, the fully converged texture C is harmonic: it carries no
+    // caustic. This is why wave_pde stops when the direct front has crossed the volume (stop=arrival).
+    const VolumeShape s = cube(24);
+    wave::Settings settings;
+    settings.sponge = 6;
+    wave::Simulation sim(s, settings);
+    const std::vector<float> init = sheet(s, 13.0);
+    sim.set_initial(init);
+    std::vector<float> c(s.size(), 0.0f);
+    int steps = 0;
+    // Until every |phi| < 1e-5: the dropped remainder of the sum is of that order.
+    while (sim.step(&c) > 1e-5 && steps < 200000) ++steps;
+    sim.flush(&c);
+    ASSERT_LT(steps, 200000);
+    double worst = 0.0, scale = 0.0;
+    const double lam = settings.courant * settings.courant;
+    auto at = [&](int i, int j, int k) -> double {
+        return (i < 0 || j < 0 || k < 0 || i >= s.nx || j >= s.ny || k >= s.nz) ? 0.0 : c[s.index(i, j, k)];
+    };
+    for (int k = 0; k < s.nz; ++k)
+        for (int j = 0; j < s.ny; ++j)
+            for (int i = 0; i < s.nx; ++i) {
+                const int d = std::max({6 - i, i - (s.nx - 7), 6 - j, j - (s.ny - 7), 6 - k, k - (s.nz - 7), 0});
+                const double m = d / 6.0, sdt = settings.sponge_strength * settings.courant * m * m;
+                const double lap = at(i - 1, j, k) + at(i + 1, j, k) + at(i, j - 1, k) + at(i, j + 1, k) +
+                                   at(i, j, k - 1) + at(i, j, k + 1) - 6.0 * at(i, j, k);
+                worst = std::max(worst, std::fabs(lam * lap + sdt * init[s.index(i, j, k)]));
+                scale = std::max(scale, sdt * init[s.index(i, j, k)]);
+            }
+    std::printf("converged after %d steps: max |courant^2 L(C) + s phi0| = %.3g (max s phi0 %.3g)\n", steps, worst, scale);
+    EXPECT_GT(scale, 0.1);
+    EXPECT_LT(worst, 1e-3 * scale);
 }
 
 TEST(WaveMethod, CourantAboveBoundIsRefused) {
@@ -200,10 +363,44 @@ TEST(WaveMethod, HardCasesStayFinite) {
     render(water_scene(sine_desc(0.05, 0.125, 512), -0.4, 1.0), {{"grid", "24"}}, "steep");
     render(water_scene(sine_desc(0.01, 0.25), -5.0, 1.0), {{"grid", "12"}}, "deep");
     render(water_scene(sine_desc(0.01, 0.25), -0.4, 1.0), {{"grid", "4"}, {"sponge", "2"}}, "grid 4");
-    // Without a damping band nothing leaves the domain: the run stops at its step cap and says so.
-    const CausticOutput closed = render(water_scene(sine_desc(0.01, 0.25), -0.4, 1.0), {{"grid", "4"}, {"sponge", "0"}}, "grid 4 no sponge");
+    // Without a damping band nothing leaves the domain: the epsilon stop ends at its step cap and says so.
+    const CausticOutput closed = render(water_scene(sine_desc(0.01, 0.25), -0.4, 1.0),
+                                        {{"grid", "4"}, {"sponge", "0"}, {"stop", "epsilon"}}, "grid 4 no sponge");
     EXPECT_EQ(closed.health.get("not_converged"), 1);
     render(water_scene(sine_desc(0.01, 0.25), -0.4, 1.0),
            {{"grid", "16"}, {"clamp_negative", "true"}, {"narrow_band", "false"}, {"b", "2"}, {"iterations", "50"}}, "options");
     render(water_scene(sine_desc(0.01, 0.25), -0.4, 1.0), {{"grid", "16"}, {"courant", "0.5773502691896258"}}, "at the bound");
+}
+
+TEST(WaveMethod, ArrivalStopKeepsTheDirectFrontOnAFlatInterface) {
+    // d'Alembert: the flat sheet splits into two half pulses; the downward one (area sqrt(2 pi) / 2 per
+    // column) passes at courant cells per step, so once it has passed a cell (margin 6: the sheet's
+    // half-width and the scheme's dispersive tail) the cell's sum is sqrt(2 pi) / (2 courant), at every
+    // depth. At the default margin the floor is uniform. stop=epsilon sums to the harmonic limit instead.
+    HeightFieldDesc flat;
+    flat.size = glm::dvec2(2.0);
+    flat.resolution = glm::ivec2(64);
+    flat.generator = HeightGenerator::Flat;
+    const Scene scene = water_scene(flat, -0.4, 1.0);
+    const double expected = std::sqrt(2.0 * M_PI) / (2.0 * 0.5);
+    // The middle third of the floor: nearer the sides, the wake of the sheet's edge (damped in the band)
+    // arrives before the cells stop.
+    auto middle = [](const CausticOutput& out) {
+        std::vector<float> v;
+        const int w = out.receiver.width, h = out.receiver.height;
+        for (int y = h / 3; y < 2 * h / 3; ++y)
+            for (int x = w / 3; x < 2 * w / 3; ++x) v.push_back(out.receiver.pixels[y * w + x]);
+        return v;
+    };
+    const CausticOutput passed = render(scene, {{"grid", "32"}, {"normalize", "raw"}, {"margin", "6"}}, "flat, margin 6");
+    for (float v : middle(passed)) EXPECT_NEAR(v, expected, 0.02 * expected);
+    const CausticOutput standard = render(scene, {{"grid", "32"}, {"normalize", "raw"}}, "flat, default");
+    const std::vector<float> floor = middle(standard);
+    const auto [lo, hi] = std::minmax_element(floor.begin(), floor.end());
+    EXPECT_LT(*hi - *lo, 0.01 * *hi);
+    const CausticOutput converged = render(scene, {{"grid", "32"}, {"normalize", "raw"}, {"stop", "epsilon"}}, "flat, epsilon");
+    const std::size_t centre = passed.receiver.pixels.size() / 2 + passed.receiver.width / 2;
+    std::printf("flat floor: margin 6 %.4f (expected %.4f), default %.4f, epsilon %.4f\n", passed.receiver.pixels[centre],
+                expected, standard.receiver.pixels[centre], converged.receiver.pixels[centre]);
+    EXPECT_LT(converged.receiver.pixels[centre], 0.5 * expected);
 }

@@ -3,10 +3,14 @@
 // update(frame): phi = 1 on the cells the water-air interface crosses, 0 elsewhere, zero initial
 // velocity; leapfrog steps of the wave equation over the water volume padded by a damping band;
 // the caustic texture is the sum of phi over the steps, mapped by a * max(0, C)^b (Sec. 4.1).
+// By default (stop=arrival) each cell sums phi until the downward front has passed it by `margin`
+// cells, and only a window of layers around the front is updated (see arrival_steps for why the sum
+// to convergence, Algorithm 3's stop, carries no caustic).
 // render(): trilinear lookups at the receiver points (shared with eikonal_fmm, harness/volume_grid).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 
 #include <tbb/parallel_for.h>
 
@@ -71,7 +75,9 @@ public:
           a_(p.get_float("a")),
           b_(p.get_float("b")),
           normalize_flux_(p.get_enum("normalize") == "flux"),
-          smooth_init_(p.get_enum("init") == "smooth") {
+          smooth_init_(p.get_enum("init") == "smooth"),
+          stop_epsilon_(p.get_enum("stop") == "epsilon"),
+          margin_(p.get_float("margin")) {
         settings_.courant = p.get_float("courant");
         settings_.sponge = static_cast<int>(p.get_int("sponge"));
         settings_.sponge_strength = p.get_float("sponge_strength");
@@ -100,27 +106,32 @@ public:
         init_ms_ = ms_since(t0);
 
         t0 = std::chrono::steady_clock::now();
-        // iterations = 0: until every |phi| < epsilon (Algorithm 3), with a cap far beyond the time a
-        // front needs to cross the padded domain and be absorbed.
-        const int cap = steps_ > 0 ? steps_
-                                   : static_cast<int>(std::ceil(20.0 * (full.nx + full.ny + full.nz) / settings_.courant));
+        const bool window = steps_ == 0 && !stop_epsilon_;
+        const int cap = steps_ > 0 ? steps_ : stop_epsilon_ ? epsilon_step_cap(full) : arrival_steps(hf, interior);
+        // stop=arrival: the layer of the downward front's centre at step 0 (cell centres at k + 1/2).
+        const double front0 = (interface_top(hf) - full.origin.z) / full.spacing - 0.5;
         int step = 0;
         bool finite = true, settled = false;
         for (; step < cap; ++step) {
-            const double max_abs = sim.step(&accumulated);
+            // A layer accumulates until the front's centre is margin_ below it.
+            const int top = window ? static_cast<int>(std::floor(front0 - settings_.courant * step + margin_))
+                                   : std::numeric_limits<int>::max();
+            if (window && top < settings_.sponge) break;  // every layer of the texture is done
+            const double max_abs = sim.step(&accumulated, top);
             if (!std::isfinite(max_abs)) {
                 finite = false;
                 break;
             }
-            if (steps_ == 0 && max_abs < epsilon_) {
+            if (steps_ == 0 && stop_epsilon_ && max_abs < epsilon_) {
                 settled = true;
                 ++step;
                 break;
             }
         }
+        sim.flush(&accumulated);
         steps_taken_ = step;
         solve_ms_ = ms_since(t0);
-        if (steps_ == 0 && !settled && finite) health_.add("not_converged");
+        if (steps_ == 0 && stop_epsilon_ && !settled && finite) health_.add("not_converged");
 
         // The texture over the interior box; a * max(0, C)^b.
         t0 = std::chrono::steady_clock::now();
@@ -142,6 +153,7 @@ public:
                     texture_.at(i, j, k) = static_cast<float>(a_ * (b_ == 1.0 ? c : std::pow(c, b_)));
                 }
         post_ms_ = ms_since(t0);
+
         health_.add("clamped", sim.clamped() + negative);
         health_.add("nonfinite", nonfinite);
         health_.add("cfl_violations", settings_.courant > kMaxCourant ? 1 : 0);  // refused by the parameter range
@@ -152,6 +164,26 @@ public:
         surface_z_ = hf.height.empty() ? 0.0 : mean / static_cast<double>(hf.height.size());
         built_frame_ = frame.frame;
         built_scene_ = frame.scene;
+    }
+
+    // stop=arrival: an upper bound of the steps (the front's centre margin_ past the bottom of the
+    // volume); the loop ends when the last layer of the texture stops accumulating. Why not Algorithm
+    // 3's "until every |phi| < epsilon": summing the scheme over all steps gives courant^2 L(C) =
+    // -sigma dt phi^0 for the total C, i.e. C is harmonic wherever the band does not damp the initial
+    // sheet and carries no caustic; the caustic is in the partial sum T M_T (Kirchhoff's formula) just
+    // after the front has passed, which each cell keeps.
+    int arrival_steps(const HeightField& hf, const VolumeShape& interior) const {
+        const double cells = (interface_top(hf) - interior.origin.z) / interior.spacing + margin_;
+        return std::max(1, static_cast<int>(std::ceil(cells / settings_.courant))) + 1;
+    }
+    static double interface_top(const HeightField& hf) {
+        double top = -1e300;
+        for (float z : hf.height) top = std::max(top, static_cast<double>(z));
+        return top;
+    }
+    // stop=epsilon: a cap far beyond the time a front needs to cross the padded domain and be absorbed.
+    int epsilon_step_cap(const VolumeShape& full) const {
+        return static_cast<int>(std::ceil(20.0 * (full.nx + full.ny + full.nz) / settings_.courant));
     }
 
     CausticOutput render(const FrameGeometry& frame, const RenderRequest& request) override {
@@ -169,7 +201,8 @@ public:
 private:
     int grid_, steps_;
     double epsilon_, a_, b_;
-    bool normalize_flux_, smooth_init_;
+    bool normalize_flux_, smooth_init_, stop_epsilon_;
+    double margin_;
     wave::Settings settings_;
     VolumeF texture_;
     double ior_ = 1.33, surface_z_ = 0.0, init_ms_ = 0.0, solve_ms_ = 0.0, post_ms_ = 0.0;
@@ -192,20 +225,30 @@ MethodInfo wave_pde_info() {
          "3-D texture: cells along the longer horizontal side of the water volume; z at the same spacing "
          "(the damping band adds `sponge` cells on every side)"},
         {"iterations", ParamType::Int, "0", 0, 1000000, {},
-         "time steps of the wave simulation; 0 = until every |phi| < epsilon (Algorithm 3)"},
+         "time steps of the wave simulation; 0 = until the `stop` rule holds"},
+        {"stop", ParamType::Enum, "arrival", 0, 0, {"arrival", "epsilon"},
+         "iterations=0: arrival = each cell sums phi until the front from the interface is `margin` cells "
+         "past it (about depth / (c dt) steps; a window of layers around the front is updated; later "
+         "steps only add wakes that cancel the caustic), epsilon = "
+         "until every |phi| < epsilon (Algorithm 3; thousands of steps, and its limit is harmonic in "
+         "the volume, i.e. without caustics)"},
         {"courant", ParamType::Float, "0.5", 0.01, kMaxCourant, {},
          "Courant number c dt / h of the leapfrog scheme; stable only up to 1/sqrt(3) = 0.5773502691896258"},
         {"init", ParamType::Enum, "smooth", 0, 0, {"cells", "smooth"},
          "initial phi: cells (1 on cells the interface crosses, the paper) or smooth (exp(-d^2/2h^2) of "
          "the distance d to the interface: no grid-scale ringing, settles far sooner)"},
-        {"epsilon", ParamType::Float, "0.001", 1e-9, 1.0, {}, "iterations=0: stop when every |phi| is below this"},
+        {"margin", ParamType::Float, "3", 0.0, 64.0, {},
+         "stop=arrival: a cell stops accumulating when the downward front's centre is this many cells "
+         "past it (3: the initial sheet's half-width; 6 also takes the scheme's dispersive tail behind "
+         "the pulse; much more adds the wakes that cancel the caustic)"},
+        {"epsilon", ParamType::Float, "0.001", 1e-9, 1.0, {}, "iterations=0, stop=epsilon: stop when every |phi| is below this"},
         {"sponge", ParamType::Int, "12", 0, 256, {},
          "damping band width in cells on every side of the volume (smooth quadratic ramp) so the domain "
          "boundary does not reflect"},
         {"sponge_strength", ParamType::Float, "0.5", 0.0, 100.0, {},
          "damping coefficient sigma (per unit time, c = h = 1) at the outer edge of the band"},
         {"narrow_band", ParamType::Bool, "true", 0, 0, {},
-         "update only z-layers next to non-zero values (Sec. 4: the wave has a finite speed)"},
+         "update only x rows next to non-zero values (Sec. 4: the wave has a finite speed)"},
         {"clamp_negative", ParamType::Bool, "false", 0, 0, {},
          "clamp phi to non-negative values after every step (Sec. 5.2; localizes the wave, adds error)"},
         {"a", ParamType::Float, "1", 1e-12, 1e12, {}, "post-process a * C^b of the accumulated value C (Sec. 4.1): a"},

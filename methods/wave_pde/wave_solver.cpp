@@ -1,127 +1,213 @@
-// Leapfrog wave propagation with a damping band and a layer-granular narrow band (Mercier 2013, Sec. 4).
+// Leapfrog wave propagation with a damping band and a row-granular narrow band (Mercier 2013, Sec. 4).
 #include "wave_solver.hpp"
 
 #include <algorithm>
-#include <atomic>
+#include <bit>
 #include <cmath>
+#include <limits>
 
 #include <tbb/parallel_for.h>
 
 namespace caustics::wave {
 namespace {
 
+// A row whose |phi| never exceeds this is set to exact zeros and leaves the narrow band.
 constexpr float kBandThreshold = 1e-7f;
+// Layers updated above the accumulating window: the zeroed layers' disturbance moves at most at the
+// wave speed (courant layers per step, as fast as the window), so past these it no longer reaches the
+// accumulating layers but for the scheme's exponentially small numerical precursor.
+constexpr int kGuardLayers = 4;
 
-std::vector<float> ramp(int n, int sponge) {
-    std::vector<float> r(static_cast<std::size_t>(n), 0.0f);
-    if (sponge <= 0) return r;
-    for (int i = 0; i < n; ++i) {
-        const int d = std::max(sponge - i, i - (n - 1 - sponge));  // cells into the band, 1..sponge
-        if (d > 0) r[static_cast<std::size_t>(i)] = static_cast<float>(std::min(d, sponge)) / sponge;
+std::uint32_t abs_bits(float v) { return std::bit_cast<std::uint32_t>(v) & 0x7fffffffu; }
+
+// Cells into the damping band per index along one axis (1..sponge in the band, 0 inside).
+std::vector<int> band_depth(int n, int sponge) {
+    std::vector<int> d(static_cast<std::size_t>(n), 0);
+    if (sponge <= 0) return d;
+    for (int i = 0; i < n; ++i) d[static_cast<std::size_t>(i)] = std::clamp(std::max(sponge - i, i - (n - 1 - sponge)), 0, sponge);
+    return d;
+}
+
+// One x row of the leapfrog update: p (phi^{n-1} in, phi^{n+1} out) from c (phi^n) and its four y/z
+// neighbour rows; a, b, l: the factors of phi^n, phi^{n-1} and the Laplacian. Adds phi^n + phi^{n-1}
+// to acc when Accumulate (every other step: half the accumulator traffic). Returns the largest |phi^{n+1}| as its IEEE bits without the sign (a NaN compares above
+// inf): an integer maximum, which vectorises where a float one would not (NaN ordering).
+// Kept out of line: inlined into the tile loop, GCC no longer vectorises it.
+template <bool Clamp, bool Accumulate>
+[[gnu::noinline]] std::uint32_t update_row(int n, const float* __restrict c, const float* __restrict ym, const float* __restrict yp,
+                         const float* __restrict zm, const float* __restrict zp, float* __restrict p,
+                         float* __restrict acc, const float* __restrict a, const float* __restrict b,
+                         const float* __restrict l, std::int64_t& clamped) {
+    std::uint32_t top = 0;
+    std::int64_t negative = 0;
+    // The x faces (zero neighbour outside the grid), scalar.
+    auto edge = [&](int i, float left, float right) {
+        const float lap = left + right + ym[i] + yp[i] + zm[i] + zp[i] - 6.0f * c[i];
+        float next = a[i] * c[i] - b[i] * p[i] + l[i] * lap;
+        if constexpr (Accumulate) acc[i] += c[i] + p[i];
+        if constexpr (Clamp) {
+            negative += next < 0.0f;
+            next = next < 0.0f ? 0.0f : next;
+        }
+        p[i] = next;
+        top = std::max(top, abs_bits(next));
+    };
+    edge(0, 0.0f, n > 1 ? c[1] : 0.0f);
+    if (n == 1) {
+        clamped += negative;
+        return top;
     }
-    return r;
+    // The interior of the row: branch-free and vectorised.
+    for (int i = 1; i + 1 < n; ++i) {
+        const float lap = c[i - 1] + c[i + 1] + ym[i] + yp[i] + zm[i] + zp[i] - 6.0f * c[i];
+        float next = a[i] * c[i] - b[i] * p[i] + l[i] * lap;
+        if constexpr (Accumulate) acc[i] += c[i] + p[i];
+        if constexpr (Clamp) {
+            negative += next < 0.0f;
+            next = next < 0.0f ? 0.0f : next;
+        }
+        p[i] = next;
+        const std::uint32_t bits = abs_bits(next);
+        top = top > bits ? top : bits;
+    }
+    edge(n - 1, c[n - 2], 0.0f);
+    clamped += negative;
+    return top;
 }
 
 }  // namespace
 
 Simulation::Simulation(const VolumeShape& shape, const Settings& settings)
     : shape_(shape), settings_(settings), cur_(shape.size(), 0.0f), prev_(shape.size(), 0.0f),
-      ramp_x_(ramp(shape.nx, settings.sponge)), ramp_y_(ramp(shape.ny, settings.sponge)),
-      ramp_z_(ramp(shape.nz, settings.sponge)), active_(static_cast<std::size_t>(shape.nz), 0),
-      zero_row_(static_cast<std::size_t>(shape.nx), 0.0f) {}
+      depth_x_(band_depth(shape.nx, settings.sponge)), depth_y_(band_depth(shape.ny, settings.sponge)),
+      depth_z_(band_depth(shape.nz, settings.sponge)),
+      row_cur_(static_cast<std::size_t>(shape.ny) * shape.nz, 0), row_prev_(row_cur_),
+      zero_row_(static_cast<std::size_t>(shape.nx), 0.0f) {
+    // (1 + s/2) phi^{n+1} = 2 phi^n - (1 - s/2) phi^{n-1} + courant^2 L(phi^n), s = sigma dt.
+    const int levels = std::max(settings.sponge, 0) + 1;
+    const std::size_t nx = static_cast<std::size_t>(shape.nx);
+    coef_.assign(3 * nx * static_cast<std::size_t>(levels), 0.0f);
+    const double lam = settings.courant * settings.courant;
+    for (int dyz = 0; dyz < levels; ++dyz)
+        for (std::size_t i = 0; i < nx; ++i) {
+            const int d = std::max(dyz, depth_x_[i]);
+            const double m = settings.sponge > 0 ? static_cast<double>(d) / settings.sponge : 0.0;
+            const double half_s = 0.5 * settings.sponge_strength * settings.courant * m * m;
+            float* row = coef_.data() + 3 * nx * static_cast<std::size_t>(dyz);
+            row[i] = static_cast<float>(2.0 / (1.0 + half_s));
+            row[nx + i] = static_cast<float>((1.0 - half_s) / (1.0 + half_s));
+            row[2 * nx + i] = static_cast<float>(lam / (1.0 + half_s));
+        }
+}
 
 void Simulation::set_initial(const std::vector<float>& initial) {
     cur_ = initial;
-    prev_ = initial;
-    const std::size_t layer = static_cast<std::size_t>(shape_.nx) * shape_.ny;
-    for (int k = 0; k < shape_.nz; ++k) {
-        float m = 0.0f;
-        for (std::size_t c = k * layer; c < (k + 1) * layer; ++c) m = std::max(m, std::fabs(cur_[c]));
-        active_[static_cast<std::size_t>(k)] = m > kBandThreshold;
+    const std::size_t nx = static_cast<std::size_t>(shape_.nx);
+    for (std::size_t r = 0; r < row_cur_.size(); ++r) {
+        std::uint32_t top = 0;
+        for (std::size_t c = r * nx; c < (r + 1) * nx; ++c) top = std::max(top, abs_bits(cur_[c]));
+        const bool keep = !settings_.narrow_band || top > std::bit_cast<std::uint32_t>(kBandThreshold);
+        if (!keep) std::fill_n(cur_.begin() + static_cast<std::ptrdiff_t>(r * nx), nx, 0.0f);
+        row_cur_[r] = keep;
     }
+    prev_ = cur_;
+    row_prev_ = row_cur_;
 }
 
-double Simulation::step(std::vector<float>* accumulate) {
+double Simulation::step(std::vector<float>* accumulate, int accumulate_top) {
     const VolumeShape& s = shape_;
-    const std::size_t layer = static_cast<std::size_t>(s.nx) * s.ny;
-    const float lam = static_cast<float>(settings_.courant * settings_.courant);
-    const float sig_scale = static_cast<float>(settings_.sponge_strength * settings_.courant);  // sigma dt at d = 1
-    const bool clamp = settings_.clamp_negative;
-    std::vector<float> layer_max(static_cast<std::size_t>(s.nz), 0.0f);
-    std::vector<std::uint8_t> update(static_cast<std::size_t>(s.nz), 0);
-    for (int k = 0; k < s.nz; ++k) {
-        bool u = !settings_.narrow_band || active_[static_cast<std::size_t>(k)];
-        if (k > 0) u = u || active_[static_cast<std::size_t>(k - 1)];
-        if (k + 1 < s.nz) u = u || active_[static_cast<std::size_t>(k + 1)];
-        update[static_cast<std::size_t>(k)] = u;
+    const int nx = s.nx, ny = s.ny, nz = s.nz;
+    const std::size_t layer = static_cast<std::size_t>(nx) * ny;
+    const std::uint32_t threshold_bits = std::bit_cast<std::uint32_t>(kBandThreshold);
+    const bool band = settings_.narrow_band, clamp = settings_.clamp_negative;
+    // Levels are accumulated in pairs: the odd steps add phi^n + phi^{n-1}; flush() adds a last odd one.
+    const bool pair = steps_ % 2 == 1;
+    if (accumulate) pending_ = !pair;
+    // The window: layers above accumulate_top no longer accumulate (a layer leaving on an odd step
+    // still owes its phi^{n-1}); layers above it + kGuardLayers are set to zero and no longer updated.
+    accumulate_top = std::clamp(accumulate_top, -1, nz - 1);
+    const int update_top = std::min(nz - 1, accumulate_top + kGuardLayers);
+    if (accumulate && pair)
+        for (int k = accumulate_top + 1; k <= std::min(accumulate_top_, nz - 1); ++k)
+            for (std::size_t c = static_cast<std::size_t>(k) * layer; c < static_cast<std::size_t>(k + 1) * layer; ++c)
+                (*accumulate)[c] += prev_[c];
+    for (int k = update_top + 1; k <= std::min(update_top_, nz - 1); ++k) {
+        const auto first = static_cast<std::ptrdiff_t>(static_cast<std::size_t>(k) * layer);
+        std::fill_n(cur_.begin() + first, layer, 0.0f);
+        std::fill_n(prev_.begin() + first, layer, 0.0f);
+        std::fill_n(row_cur_.begin() + k * ny, ny, 0);
+        std::fill_n(row_prev_.begin() + k * ny, ny, 0);
     }
-    std::atomic<std::int64_t> clamped{0}, updated{0};
-    tbb::parallel_for(0, s.nz, [&](int k) {
-        if (!update[static_cast<std::size_t>(k)]) return;
-        std::int64_t local_clamped = 0;
-        float local_max = 0.0f;
-        const float rz = ramp_z_[static_cast<std::size_t>(k)];
-        for (int j = 0; j < s.ny; ++j) {
-            const std::size_t row = s.index(0, j, k);
+    accumulate_top_ = accumulate_top;
+    update_top_ = update_top;
+    // Tiles of kTileRows y rows, each swept along z: the three z layers of a tile stay in cache, so phi^n
+    // is read from memory once per step (a z slab's neighbour layers would not fit at 256^3).
+    constexpr int kTileRows = 8;
+    const int tiles = (ny + kTileRows - 1) / kTileRows;
+    std::vector<std::uint32_t> tile_top(static_cast<std::size_t>(tiles), 0);
+    std::vector<std::int64_t> tile_clamped(static_cast<std::size_t>(tiles), 0), tile_rows(static_cast<std::size_t>(tiles), 0);
+    // row_prev_ becomes the flags of phi^{n+1}: each row reads its own flag before writing it, and
+    // only row_cur_ (not written here) is read across rows, so tiles are independent.
+    tbb::parallel_for(0, tiles, [&](int t) {
+        std::uint32_t top = 0;
+        std::int64_t clamped = 0, rows = 0;
+        const int j0 = t * kTileRows, j1 = std::min(ny, j0 + kTileRows);
+        for (int k = 0; k <= update_top; ++k)
+        for (int j = j0; j < j1; ++j) {
+            const std::size_t kk = static_cast<std::size_t>(k);
+            const std::size_t r = kk * ny + j;
+            if (band) {
+                const bool near = row_cur_[r] || row_prev_[r] || (j > 0 && row_cur_[r - 1]) || (j + 1 < ny && row_cur_[r + 1]) ||
+                                  (k > 0 && row_cur_[r - ny]) || (k + 1 < nz && row_cur_[r + ny]);
+                if (!near) continue;  // phi^n and phi^{n-1} are exact zeros here and around: so is phi^{n+1}
+            }
+            const std::size_t row = r * nx;
             const float* c = cur_.data() + row;
-            const float* ym = j > 0 ? c - s.nx : zero_row_.data();
-            const float* yp = j + 1 < s.ny ? c + s.nx : zero_row_.data();
+            const float* ym = j > 0 ? c - nx : zero_row_.data();
+            const float* yp = j + 1 < ny ? c + nx : zero_row_.data();
             const float* zm = k > 0 ? c - layer : zero_row_.data();
-            const float* zp = k + 1 < s.nz ? c + layer : zero_row_.data();
+            const float* zp = k + 1 < nz ? c + layer : zero_row_.data();
             float* p = prev_.data() + row;
-            float* acc = accumulate ? accumulate->data() + row : nullptr;
-            const float ryz = std::max(ramp_y_[static_cast<std::size_t>(j)], rz);
-            const float* rx = ramp_x_.data();
-            const int n = s.nx;
-            for (int i = 0; i < n; ++i) {
-                const float left = i > 0 ? c[i - 1] : 0.0f, right = i + 1 < n ? c[i + 1] : 0.0f;
-                const float lap = left + right + ym[i] + yp[i] + zm[i] + zp[i] - 6.0f * c[i];
-                const float m = std::max(rx[i], ryz);
-                const float sig = sig_scale * m * m;
-                float next = (2.0f * c[i] - (1.0f - 0.5f * sig) * p[i] + lam * lap) / (1.0f + 0.5f * sig);
-                if (clamp && next < 0.0f) {
-                    next = 0.0f;
-                    ++local_clamped;
-                }
-                if (acc) acc[i] += c[i];
-                p[i] = next;
-                local_max = std::max(local_max, std::fabs(next));
-            }
+            float* acc = accumulate && pair && k <= accumulate_top ? accumulate->data() + row : nullptr;
+            const std::size_t dyz = static_cast<std::size_t>(std::max(depth_y_[static_cast<std::size_t>(j)], depth_z_[kk]));
+            const float* a = coef_.data() + 3 * static_cast<std::size_t>(nx) * dyz;
+            const float* b = a + nx;
+            const float* l = b + nx;
+            const std::uint32_t row_top =
+                clamp ? (acc ? update_row<true, true>(nx, c, ym, yp, zm, zp, p, acc, a, b, l, clamped)
+                             : update_row<true, false>(nx, c, ym, yp, zm, zp, p, acc, a, b, l, clamped))
+                      : (acc ? update_row<false, true>(nx, c, ym, yp, zm, zp, p, acc, a, b, l, clamped)
+                             : update_row<false, false>(nx, c, ym, yp, zm, zp, p, acc, a, b, l, clamped));
+            ++rows;
+            top = std::max(top, row_top);
+            const bool nonzero = !band || row_top > threshold_bits;
+            if (!nonzero) std::fill_n(p, nx, 0.0f);  // leaves the band: exact zeros
+            row_prev_[r] = nonzero;
         }
-        layer_max[static_cast<std::size_t>(k)] = local_max;
-        clamped += local_clamped;
-        updated += static_cast<std::int64_t>(layer);
+        tile_top[static_cast<std::size_t>(t)] = top;
+        tile_clamped[static_cast<std::size_t>(t)] = clamped;
+        tile_rows[static_cast<std::size_t>(t)] = rows;
     });
-    clamped_ += clamped.load();
-    cells_updated_ += updated.load();
-    std::swap(cur_, prev_);
-    double max_abs = 0.0;
-    for (int k = 0; k < s.nz; ++k) {
-        const std::size_t kk = static_cast<std::size_t>(k);
-        if (!update[kk]) continue;
-        max_abs = std::max(max_abs, static_cast<double>(layer_max[kk]));
-        if (std::isnan(layer_max[kk])) max_abs = layer_max[kk];
-        // The layer's previous values (now prev_) were checked when it was last updated; it stays in
-        // the band while either time level is above the threshold.
-        const bool was = active_[kk];
-        const bool now = layer_max[kk] > kBandThreshold;
-        if (settings_.narrow_band && was && !now) {
-            // Leaving the band: values below the threshold become exact zeros.
-            bool prev_small = true;
-            for (std::size_t c = kk * layer; c < (kk + 1) * layer && prev_small; ++c)
-                prev_small = std::fabs(prev_[c]) <= kBandThreshold;
-            if (prev_small) {
-                std::fill(cur_.begin() + static_cast<std::ptrdiff_t>(kk * layer), cur_.begin() + static_cast<std::ptrdiff_t>((kk + 1) * layer), 0.0f);
-                std::fill(prev_.begin() + static_cast<std::ptrdiff_t>(kk * layer), prev_.begin() + static_cast<std::ptrdiff_t>((kk + 1) * layer), 0.0f);
-                active_[kk] = 0;
-                continue;
-            }
-        }
-        active_[kk] = now || was;
-        if (!now && !was) active_[kk] = 0;
-        if (now) active_[kk] = 1;
+    std::uint32_t top = 0;
+    for (std::size_t t = 0; t < tile_top.size(); ++t) {
+        top = std::max(top, tile_top[t]);
+        clamped_ += tile_clamped[t];
+        cells_updated_ += tile_rows[t] * nx;
     }
-    return max_abs;
+    std::swap(cur_, prev_);
+    std::swap(row_cur_, row_prev_);
+    ++steps_;
+    // Bits above +inf's are NaN: report them as NaN so the caller stops.
+    if (top > 0x7f800000u) return std::numeric_limits<double>::quiet_NaN();
+    return static_cast<double>(std::bit_cast<float>(top));
+}
+
+void Simulation::flush(std::vector<float>* accumulate) {
+    if (!accumulate || !pending_) return;
+    // The last step was even: its phi^n (now prev_) has not been added in the accumulating layers.
+    const std::size_t end = static_cast<std::size_t>(accumulate_top_ + 1) * shape_.nx * shape_.ny;
+    for (std::size_t c = 0; c < end; ++c) (*accumulate)[c] += prev_[c];
+    pending_ = false;
 }
 
 namespace {

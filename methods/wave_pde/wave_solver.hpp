@@ -5,7 +5,15 @@
 //   phi^{n+1} = (2 phi^n - (1 - s/2) phi^{n-1} + courant^2 L(phi^n)) / (1 + s/2),
 // s = sigma dt, sigma = strength * (d / sponge)^2 at depth d (cells) into the band: a smooth ramp so the
 // band itself does not reflect. Exposed for the tests; the plugin is wave_pde.cpp.
+//
+// Layout for speed: two float arrays (phi^{n+1} overwrites phi^{n-1}); the three update coefficients
+// depend only on the band depth max(d_x, d_yz), so one coefficient row per band depth of the (y, z)
+// pair is precomputed and the inner loop over an x row is branch-free; tiles of y rows, each swept
+// along z, run in parallel; the narrow band is tracked per x row (a row is updated when it or a y/z
+// neighbour row is non-zero), and an inactive row holds exact zeros, so the result does not depend on
+// the thread count.
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "volume_grid.hpp"
@@ -16,7 +24,7 @@ struct Settings {
     double courant = 0.5;          // c dt / h; stable up to 1 / sqrt(3)
     int sponge = 0;                // damping band width in cells (part of the grid)
     double sponge_strength = 0.5;  // sigma at the outer face, per unit time (c = h = 1)
-    bool narrow_band = true;       // update only z-layers next to non-zero values (Sec. 4)
+    bool narrow_band = true;       // update only x rows next to non-zero values (Sec. 4)
     bool clamp_negative = false;   // phi = max(phi, 0) after every step
 };
 
@@ -26,8 +34,14 @@ public:
 
     // Sets phi^0 = phi^{-1} = initial (zero initial velocity).
     void set_initial(const std::vector<float>& initial);
-    // One leapfrog step; adds phi^n to `accumulate` (Algorithm 3) when non-null. Returns max |phi^{n+1}|.
-    double step(std::vector<float>* accumulate);
+    // One leapfrog step phi^n -> phi^{n+1}; returns max |phi^{n+1}| (NaN if any is not finite). With
+    // `accumulate` (Algorithm 3's sum of phi), the levels are added in pairs on the odd steps, so after
+    // the last step call flush() with the same array: it then holds phi^0 + ... + phi^{N-1}.
+    // accumulate_top: the window of a front moving down (-z). Layers k > accumulate_top stop
+    // accumulating; layers k > accumulate_top + 4 are set to zero and no longer updated. It may only
+    // decrease from step to step.
+    double step(std::vector<float>* accumulate, int accumulate_top = std::numeric_limits<int>::max());
+    void flush(std::vector<float>* accumulate);
     // Discrete energy ||phi^n - phi^{n-1}||^2 / courant^2 + <grad phi^n, grad phi^{n-1}> (edges to the
     // zero exterior included): exactly conserved by leapfrog without damping.
     double energy() const;
@@ -44,10 +58,16 @@ private:
     VolumeShape shape_;
     Settings settings_;
     std::vector<float> cur_, prev_;
-    std::vector<float> ramp_x_, ramp_y_, ramp_z_;  // d / sponge per index along each axis
-    std::vector<std::uint8_t> active_;             // per z-layer: any |phi| above the band threshold
+    std::vector<int> depth_x_, depth_y_, depth_z_;  // cells into the damping band (0 outside) per index
+    // coef_[(3 * d_yz + q) * nx + i], q = 0, 1, 2: the factors of phi^n, phi^{n-1} and L(phi^n) for a
+    // row at (y, z) band depth d_yz.
+    std::vector<float> coef_;
+    // Per x row (index k * ny + j): non-zero values at time level n (cur) and n - 1 (prev).
+    std::vector<std::uint8_t> row_cur_, row_prev_;
     std::vector<float> zero_row_;
-    std::int64_t clamped_ = 0, cells_updated_ = 0;
+    std::int64_t clamped_ = 0, cells_updated_ = 0, steps_ = 0;
+    bool pending_ = false;  // the last level phi^n is not yet in the accumulator
+    int accumulate_top_ = std::numeric_limits<int>::max(), update_top_ = std::numeric_limits<int>::max();
 };
 
 }  // namespace caustics::wave

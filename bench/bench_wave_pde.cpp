@@ -1,0 +1,97 @@
+// Mercier 2013, Table 1, wave column: computing the 3-D caustic texture of the pool scene with the wave
+// method takes 17 / 21 / 107 s at 64^3 / 128^3 / 256^3, and the frame rate once it is computed is
+// 49 / 12 / 2 fps. Here wave_pde through the plugin interface at its default settings: update() (the
+// texture) and render() (receiver map + camera view lookups) timed separately. The pool's floor is moved
+// to z = -2 so the 2 m x 2 m water volume is a cube of grid^3 cells (plus the damping band). Counters:
+// steps (time steps taken), band_Mcells (cells updated per step: the narrow band), texture_MB (the texture's bytes), maxrss_MB (process peak; run one 256 case
+// per process for its own peak, e.g. --benchmark_filter='Update/wave_pde/256').
+#include <benchmark/benchmark.h>
+
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <map>
+#include <memory>
+#include <string>
+
+#include "camera.hpp"
+#include "frame.hpp"
+#include "ray_tracer.hpp"
+#include "receiver_chart.hpp"
+#include "registry.hpp"
+#include "scene.hpp"
+
+using namespace caustics;
+
+namespace {
+
+struct PoolCube {
+    Scene scene;
+    std::unique_ptr<FrameGeometry> frame;
+    std::unique_ptr<ReceiverChart> chart;
+    std::unique_ptr<CameraGBuffer> gbuffer;
+};
+
+PoolCube& pool() {
+    static PoolCube p = [] {
+        PoolCube c;
+        c.scene = load_scene(std::string(CAUSTICS_SOURCE_DIR) + "/scenes/pool.json");
+        for (Object& o : c.scene.objects)
+            if (o.name == "floor") o.center.z = -2.0;
+        c.frame = std::make_unique<FrameGeometry>(build_frame_geometry(c.scene, 0));
+        c.chart = std::make_unique<ReceiverChart>(*c.frame, c.scene.receiver.width, c.scene.receiver.height);
+        RayTracer tracer(*c.frame);
+        c.gbuffer = std::make_unique<CameraGBuffer>(build_camera_gbuffer(tracer, c.scene.camera));
+        return c;
+    }();
+    return p;
+}
+
+double maxrss_mb() {
+    rusage u{};
+    getrusage(RUSAGE_SELF, &u);
+    return u.ru_maxrss / 1024.0;
+}
+
+std::unique_ptr<Method> make(std::map<std::string, std::string> params) {
+    const MethodInfo& info = require_method("wave_pde");
+    return info.create(ParamSet::resolve(info.name, info.params, params));
+}
+
+void Update(benchmark::State& state, std::map<std::string, std::string> params) {
+    PoolCube& p = pool();
+    params["grid"] = std::to_string(state.range(0));
+    auto m = make(params);
+    for (auto _ : state) m->update(*p.frame);
+    RenderRequest request{p.chart.get(), p.gbuffer.get()};
+    const CausticOutput out = m->render(*p.frame, request);
+    const double n = static_cast<double>(state.range(0));
+    state.counters["texture_MB"] = n * n * (n + 2) * sizeof(float) / 1e6;
+    state.counters["maxrss_MB"] = maxrss_mb();
+    state.counters["steps"] = static_cast<double>(out.health.get("steps"));
+    // Cells updated per step (the narrow band), in millions.
+    state.counters["band_Mcells"] = static_cast<double>(out.health.get("cells_updated")) / 1e6 /
+                                    std::max<double>(1.0, static_cast<double>(out.health.get("steps")));
+    state.counters["not_converged"] = static_cast<double>(out.health.get("not_converged"));
+    state.counters["nonfinite"] = static_cast<double>(out.health.get("nonfinite"));
+}
+
+void Lookup(benchmark::State& state, std::map<std::string, std::string> params) {
+    PoolCube& p = pool();
+    params["grid"] = std::to_string(state.range(0));
+    auto m = make(params);
+    m->update(*p.frame);
+    RenderRequest request{p.chart.get(), p.gbuffer.get()};
+    for (auto _ : state) benchmark::DoNotOptimize(m->render(*p.frame, request));
+    std::size_t covered = 0;
+    for (auto c : p.gbuffer->covered) covered += c;
+    state.counters["lookups"] = static_cast<double>(p.chart->width() * p.chart->height() + covered);
+}
+
+}  // namespace
+
+// One update per repetition: the 256^3 case is seconds long.
+BENCHMARK_CAPTURE(Update, wave_pde, {})->Arg(64)->Arg(128)->Arg(256)->Iterations(1)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(Lookup, wave_pde, {})->Arg(64)->Arg(128)->Arg(256)->Unit(benchmark::kMillisecond);
+
+BENCHMARK_MAIN();
