@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -25,6 +26,7 @@ struct Setup {
     double z[3];                  // view depth per vertex
     int x0, x1, y0, y1;           // pixel-centre bounding box, inclusive; x0 > x1: nothing to draw
     glm::vec3 flat_normal;        // geometric normal (used when no vertex normals)
+    bool front;                   // front facing (draw_front_back: selects the target)
 };
 
 struct VertexOut {
@@ -91,7 +93,21 @@ GBufferStats GBufferRaster::draw(const LightProjection& view, const GBufferTrian
     GBufferStats pre;
     GBufferTriangles eff = batch;
     if (view.type == ProjectionType::Perspective) clip_near(view, batch, eff, pre);
-    return draw_clipped(view, eff, cull, test, target, pre);
+    return draw_clipped(view, eff, cull, test, target, nullptr, pre);
+}
+
+GBufferStats GBufferRaster::draw_front_back(const LightProjection& view, const GBufferTriangles& batch, DepthTest test,
+                                            GBuffer& front, GBuffer& back) {
+    for (const GBuffer* t : {&front, &back})
+        if (t->width != view.width || t->height != view.height ||
+            t->depth.size() != static_cast<std::size_t>(view.width) * view.height)
+            throw std::invalid_argument("GBufferRaster: target size differs from the projection's");
+    if (!batch.normals.empty() && batch.normals.size() != batch.positions.size())
+        throw std::invalid_argument("GBufferRaster: normals must be empty or one per position");
+    GBufferStats pre;
+    GBufferTriangles eff = batch;
+    if (view.type == ProjectionType::Perspective) clip_near(view, batch, eff, pre);
+    return draw_clipped(view, eff, CullMode::None, test, front, &back, pre);
 }
 
 // Perspective: a copy of the batch clipped against the near plane, only when some triangle needs it.
@@ -148,7 +164,9 @@ void GBufferRaster::clip_near(const LightProjection& view, const GBufferTriangle
 }
 
 GBufferStats GBufferRaster::draw_clipped(const LightProjection& view, const GBufferTriangles& batch, CullMode cull,
-                                         DepthTest test, GBuffer& target, const GBufferStats& pre) {
+                                         DepthTest test, GBuffer& front_target, GBuffer* back_target,
+                                         const GBufferStats& pre) {
+    GBuffer& target = front_target;
     Impl& m = *impl_;
     const std::size_t n = batch.triangles.size();
     const int W = target.width, H = target.height;
@@ -235,6 +253,7 @@ GBufferStats GBufferRaster::draw_clipped(const LightProjection& view, const GBuf
                     area = -area;
                 }
                 s.inv_area = 1.0 / static_cast<double>(area);
+                s.front = front;
                 const double len = glm::length(ng);
                 s.flat_normal = len > 0.0 ? glm::vec3(ng / len) : glm::vec3(0.0f);
                 m.setups[t] = s;
@@ -261,6 +280,8 @@ GBufferStats GBufferRaster::draw_clipped(const LightProjection& view, const GBuf
     m.band_fragments.assign(static_cast<std::size_t>(bands), 0);
     const bool less = test == DepthTest::Less;
     const bool have_normals = !batch.normals.empty();
+    if (back_target && back_target->normal.empty() != target.normal.empty())
+        throw std::invalid_argument("GBufferRaster: front and back targets must both have normals or neither");
     const bool write_normals = !target.normal.empty();
     tbb::parallel_for(tbb::blocked_range<int>(0, bands, 1), [&](const tbb::blocked_range<int>& r) {
         for (int b = r.begin(); b != r.end(); ++b) {
@@ -268,6 +289,7 @@ GBufferStats GBufferRaster::draw_clipped(const LightProjection& view, const GBuf
             std::int64_t fragments = 0;
             for (std::uint32_t e = m.band_start[static_cast<std::size_t>(b)]; e < m.band_start[static_cast<std::size_t>(b) + 1]; ++e) {
                 const Setup& s = m.setups[m.entries[e]];
+                GBuffer& out = back_target && !s.front ? *back_target : target;
                 const int ya = std::max(s.y0, row0), yb = std::min(s.y1, row1);
                 // Edge k is opposite vertex k: e0 = v1 -> v2, e1 = v2 -> v0, e2 = v0 -> v1.
                 const int a[3] = {1, 2, 0}, c[3] = {2, 0, 1};
@@ -289,8 +311,19 @@ GBufferStats GBufferRaster::draw_clipped(const LightProjection& view, const GBuf
                     const std::int64_t px0 = (2 * static_cast<std::int64_t>(s.x0) + 1) << (kSubpixelBits - 1);
                     std::int64_t E[3];
                     for (int k = 0; k < 3; ++k) E[k] = edge(s.X[a[k]], s.Y[a[k]], s.X[c[k]], s.Y[c[k]], px0, py);
-                    for (int x = s.x0; x <= s.x1; ++x, E[0] += step_x[0], E[1] += step_x[1], E[2] += step_x[2]) {
-                        if ((E[0] + bias[0]) < 0 || (E[1] + bias[1]) < 0 || (E[2] + bias[2]) < 0) continue;
+                    // The row's covered span, exactly from the integer edge functions: E_k + bias_k >= 0 at
+                    // x = x0 + j is E_k + bias_k + j step_k >= 0, a half-line in j (or all / nothing).
+                    std::int64_t j_lo = 0, j_hi = s.x1 - s.x0;
+                    for (int k = 0; k < 3; ++k) {
+                        const std::int64_t e0 = E[k] + bias[k], st = step_x[k];
+                        if (st > 0) j_lo = std::max(j_lo, e0 >= 0 ? 0 : floor_div(-e0 + st - 1, st));
+                        else if (st < 0) j_hi = std::min(j_hi, e0 < 0 ? -1 : floor_div(e0, -st));
+                        else if (e0 < 0) j_hi = -1;
+                    }
+                    if (j_lo > j_hi) continue;
+                    for (int k = 0; k < 3; ++k) E[k] += j_lo * step_x[k];
+                    const int xs = s.x0 + static_cast<int>(j_lo), xe = s.x0 + static_cast<int>(j_hi);
+                    for (int x = xs; x <= xe; ++x, E[0] += step_x[0], E[1] += step_x[1], E[2] += step_x[2]) {
                         ++fragments;
                         // Barycentrics in float (the edge values are exact integers; float keeps 1e-7).
                         float l0 = static_cast<float>(E[0]) * inv_area, l1 = static_cast<float>(E[1]) * inv_area;
@@ -303,16 +336,16 @@ GBufferStats GBufferRaster::draw_clipped(const LightProjection& view, const GBuf
                         } else {
                             d = l0 * z[0] + l1 * z[1] + l2 * z[2];
                         }
-                        const std::size_t i = target.index(x, y);
-                        if (less ? !(d < target.depth[i]) : !(d > target.depth[i])) continue;
-                        target.depth[i] = d;
-                        target.position[i] = l0 * P[0] + l1 * P[1] + l2 * P[2];
+                        const std::size_t i = out.index(x, y);
+                        if (less ? !(d < out.depth[i]) : !(d > out.depth[i])) continue;
+                        out.depth[i] = d;
+                        out.position[i] = l0 * P[0] + l1 * P[1] + l2 * P[2];
                         if (write_normals) {
                             const glm::vec3 nn = l0 * N[0] + l1 * N[1] + l2 * N[2];
                             const float len2 = glm::dot(nn, nn);
-                            target.normal[i] = len2 > 0.0f ? nn / std::sqrt(len2) : s.flat_normal;
+                            out.normal[i] = len2 > 0.0f ? nn / std::sqrt(len2) : s.flat_normal;
                         }
-                        target.id[i] = batch.id;
+                        out.id[i] = batch.id;
                     }
                 }
             }

@@ -74,13 +74,19 @@ public:
 
     GBufferStats draw(const LightProjection& view, const GBufferTriangles& batch, CullMode cull, DepthTest test,
                       GBuffer& target);
+    // Front faces into `front`, back faces into `back`, from one vertex and triangle set-up (the
+    // double-surface pair of Wyman's refraction): the same buffers as draw(.., CullMode::Back, .., front)
+    // followed by draw(.., CullMode::Front, .., back). Both targets have normals or neither. The stats
+    // count the batch once (fragments of both targets).
+    GBufferStats draw_front_back(const LightProjection& view, const GBufferTriangles& batch, DepthTest test,
+                                 GBuffer& front, GBuffer& back);
 
     static constexpr int kBandRows = 16;
 
 private:
     void clip_near(const LightProjection& view, const GBufferTriangles& batch, GBufferTriangles& eff, GBufferStats& stats);
     GBufferStats draw_clipped(const LightProjection& view, const GBufferTriangles& batch, CullMode cull, DepthTest test,
-                              GBuffer& target, const GBufferStats& pre);
+                              GBuffer& target, GBuffer* back_target, const GBufferStats& pre);
     struct Impl;
     std::unique_ptr<Impl> impl_;
 };

@@ -337,7 +337,7 @@ TEST(CausticMapping, SineAgainstReference) {
     ASSERT_LT(ref.noise_nrmse, 0.05);
     double at3 = 0.0;
     for (int it : {1, 3, 4, 6, 10}) {
-        const CausticOutput out = render(scene, {{"grid", "256"}, {"map", "1024"}, {"iterations", std::to_string(it)}}, 256, 4);
+        const CausticOutput out = render(scene, {{"grid", "256"}, {"map", "1024"}, {"estimator", "approx"}, {"iterations", std::to_string(it)}}, 256, 4);
         const ErrorMetrics e = compare_images(out.receiver, ref.receiver, false);
         const double corrected = std::sqrt(std::max(0.0, e.nrmse * e.nrmse - ref.noise_nrmse * ref.noise_nrmse));
         std::printf("sine approx iterations %2d: nrmse %.4f (noise-corrected %.4f) not_converged %lld null %lld\n", it,
@@ -463,16 +463,16 @@ TEST(CausticMapping, SphereFluxMatchesReference) {
     std::printf("sphere reference: caustic flux %.4f W, noise_nrmse %.3f\n", ref_flux, ref.noise_nrmse);
     double previous = 1e30;
     for (int grid : {64, 128, 256}) {
-        // bin_samples 4: the map is averaged over each bin like the reference (a bin-centre lookup of a
-        // focus narrower than a bin overshoots, which makes nrmse depend on the splat size, not the grid).
-        const CausticOutput out = render(
-            scene, {{"grid", std::to_string(grid)}, {"map", std::to_string(6 * grid)}, {"bin_samples", "4"}}, res, res);
-        const CausticOutput adaptive = render(scene, {{"grid", std::to_string(grid)}, {"map", std::to_string(6 * grid)},
-                                                      {"bin_samples", "4"}, {"splat", "adaptive"}}, res, res);
-        const ErrorMetrics ea = compare_images(adaptive.receiver, ref.receiver, false);
-        std::printf("sphere grid %3d adaptive splats: flux ratio %.3f nrmse %.3f\n", grid,
-                    total(adaptive.receiver) * bin / ref_flux, ea.nrmse);
-        EXPECT_NEAR(total(adaptive.receiver) * bin / ref_flux, 0.97, 0.05);
+        // Defaults: adaptive splats and bin_samples auto (each bin averaged over its caustic-map texels, like
+        // the reference's bins). Fixed-radius Gaussian splats are printed and must carry the same flux.
+        const CausticOutput out =
+            render(scene, {{"grid", std::to_string(grid)}, {"map", std::to_string(6 * grid)}}, res, res);
+        const CausticOutput fixed = render(scene, {{"grid", std::to_string(grid)}, {"map", std::to_string(6 * grid)},
+                                                   {"splat", "gaussian"}}, res, res);
+        const ErrorMetrics ef = compare_images(fixed.receiver, ref.receiver, false);
+        std::printf("sphere grid %3d fixed gaussian splats: flux ratio %.3f nrmse %.3f\n", grid,
+                    total(fixed.receiver) * bin / ref_flux, ef.nrmse);
+        EXPECT_NEAR(total(fixed.receiver) * bin / ref_flux, 0.97, 0.05);
         const ErrorMetrics e = compare_images(out.receiver, ref.receiver, false);
         const double flux = total(out.receiver) * bin;
         std::printf("sphere grid %3d map %4d: flux %.4f W (ratio %.3f) nrmse %.3f lost %lld tir %lld\n", grid, 6 * grid,

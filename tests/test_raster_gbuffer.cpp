@@ -214,6 +214,56 @@ TEST(GBufferRaster, DepthTestCullingAndPerspectiveAttributes) {
     EXPECT_GT(covered, 48 * 48 / 4);
 }
 
+// One set-up for both faces of a closed mesh gives exactly the buffers of two culled draws (front faces
+// with CullMode::Back, back faces with CullMode::Front), in both projections.
+TEST(GBufferRaster, FrontBackInOnePassEqualsTwoCulledDraws) {
+    std::vector<glm::vec3> pos, nrm;
+    std::vector<glm::uvec3> tris;
+    const int slices = 40, stacks = 20;
+    for (int j = 0; j <= stacks; ++j)
+        for (int i = 0; i <= slices; ++i) {
+            const double th = M_PI * j / stacks, ph = 2 * M_PI * i / slices;
+            const glm::dvec3 n(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
+            pos.emplace_back(glm::dvec3(0.1, -0.2, 0.5) + 0.7 * n);
+            nrm.emplace_back(n);
+        }
+    for (unsigned j = 0; j < static_cast<unsigned>(stacks); ++j)
+        for (unsigned i = 0; i < static_cast<unsigned>(slices); ++i) {
+            const unsigned a = j * (slices + 1) + i, c = a + slices + 1;
+            tris.push_back({a, c, a + 1});
+            tris.push_back({a + 1, c, c + 1});
+        }
+    Bounds3 b;
+    for (const glm::vec3& p : pos) b.extend(glm::dvec3(p));
+    LightProjection persp;
+    ASSERT_TRUE(fit_perspective({0.4, -0.3, 3.0}, b, 64, 64, persp));
+    for (const LightProjection& view : {fit_orthographic({0.2, 0.1, -1.0}, b, 64, 64), persp}) {
+        GBufferRaster raster;
+        GBuffer front, back, f2, b2;
+        for (GBuffer* g : {&front, &back, &f2, &b2}) g->clear(64, 64);
+        const GBufferTriangles batch{pos, nrm, tris, 3};
+        raster.draw(view, batch, CullMode::Back, DepthTest::Less, front);
+        raster.draw(view, batch, CullMode::Front, DepthTest::Less, back);
+        raster.draw_front_back(view, batch, DepthTest::Less, f2, b2);
+        EXPECT_GT(count_covered(front), 64 * 64 / 4);
+        EXPECT_EQ(count_covered(front), count_covered(back));
+        for (auto [one, two] : {std::pair{&front, &f2}, {&back, &b2}}) {
+            EXPECT_EQ(one->id, two->id);
+            EXPECT_EQ(one->depth, two->depth);
+            for (std::size_t i = 0; i < one->id.size(); ++i)
+                if (one->id[i] >= 0) {
+                    ASSERT_EQ(one->position[i], two->position[i]);
+                    ASSERT_EQ(one->normal[i], two->normal[i]);
+                }
+        }
+        // Back faces lie behind the front faces seen from the light.
+        for (std::size_t i = 0; i < front.id.size(); ++i)
+            if (front.id[i] >= 0 && back.id[i] >= 0) {
+                EXPECT_LT(front.depth[i], back.depth[i]);
+            }
+    }
+}
+
 TEST(Splat, NormalisedFootprintAndBorders) {
     SplatRaster s;
     Image img(40, 30);

@@ -6,9 +6,11 @@
 //      dielectrics also -> back-face positions/normals (Wyman's double-surface refraction);
 //   3. per grid vertex: refract (or reflect), estimate the exit point against the back-face texture and
 //      the receiver point against the receivers' texture (estimator.hpp), weight (Eq. 6 or radiometric,
-//      Eq. 7 absorption), splat into the caustic map (additive), optional low-pass;
+//      Eq. 7 absorption), splat into the caustic map (additive; footprints in splats.hpp), optional
+//      low-pass;
 //   4. receiver map and camera view: project each point into the light view, depth test against the
-//      receivers' texture, read the caustic map, divide by the receiver area of a texel -> irradiance.
+//      receivers' texture, read the caustic map, divide by the receiver area of a texel -> irradiance
+//      (lookup.hpp: every render prepares its points, then reads the map).
 #include "caustic_mapping.hpp"
 
 #include <algorithm>
@@ -19,6 +21,8 @@
 #include <tbb/combinable.h>
 #include <tbb/parallel_for.h>
 
+#include "lookup.hpp"
+#include "splats.hpp"
 #include "timing.hpp"
 
 namespace caustics::caustic_mapping {
@@ -49,11 +53,6 @@ double fresnel_t(double cos_i, double cos_t, double n1, double n2) {
     return 1.0 - 0.5 * (rs * rs + rp * rp);
 }
 
-struct FaceSplat {
-    int face;
-    Splat splat;
-};
-
 class CausticMapping final : public Method {
 public:
     explicit CausticMapping(const ParamSet& p) : s_(settings_from(p)) {}
@@ -69,7 +68,6 @@ public:
 private:
     void draw_gbuffers(const FrameGeometry& frame, const Light& light, Counters& c, std::int64_t& clipped);
     void trace(const Scene& scene, const Light& light, Counters& total);
-    double irradiance(const glm::dvec3& p, const glm::dvec3& n, std::int64_t& outside, std::int64_t& shadowed) const;
 
     Settings s_;
     std::vector<Batch> batches_;
@@ -87,6 +85,7 @@ private:
     std::vector<std::vector<Splat>> face_splats_;
     std::vector<Image> caustic_;    // per face: flux per texel [W]
     double radius_used_ = 0.0;
+    LookupSet receiver_lookups_, camera_lookups_;
 };
 
 Capability CausticMapping::capabilities(const Scene& scene) const {
@@ -128,18 +127,18 @@ void CausticMapping::draw_gbuffers(const FrameGeometry& frame, const Light& ligh
     } else {
         object_view_ = fit_orthographic(light.direction, spec, s_.grid, s_.grid);
     }
+    // Front faces of every specular object, and back faces of closed dielectrics (one set-up for both).
     front_.clear(s_.grid, s_.grid);
+    if (have_double) back_.clear(s_.grid, s_.grid);
     for (const Batch& b : batches_) {
         if (b.role == Role::Receiver) continue;
-        const CullMode cull = b.role == Role::DoubleSurface ? CullMode::Back : CullMode::None;
-        clipped += raster_.draw(object_view_, b.triangles(), cull, DepthTest::Less, front_).clipped;
+        if (b.role == Role::DoubleSurface)
+            clipped += raster_.draw_front_back(object_view_, b.triangles(), DepthTest::Less, front_, back_).clipped;
+        else
+            clipped += raster_.draw(object_view_, b.triangles(), CullMode::None, DepthTest::Less, front_).clipped;
     }
     have_back_ = have_double;
     if (have_double) {
-        back_.clear(s_.grid, s_.grid);
-        for (const Batch& b : batches_)
-            if (b.role == Role::DoubleSurface)
-                clipped += raster_.draw(object_view_, b.triangles(), CullMode::Front, DepthTest::Less, back_).clipped;
         back_tex_.faces.assign(1, object_view_);
         back_tex_.maps.resize(1);
         std::swap(back_tex_.maps[0], back_);
@@ -291,43 +290,6 @@ void CausticMapping::trace(const Scene& scene, const Light& light, Counters& tot
     counters.combine_each([&](const Counters& c) { total.add(c); });
 }
 
-double CausticMapping::irradiance(const glm::dvec3& p, const glm::dvec3& n, std::int64_t& outside,
-                                  std::int64_t& shadowed) const {
-    Texel t;
-    if (!receivers_.locate(p, t)) {
-        ++outside;
-        return 0.0;
-    }
-    const std::size_t f = static_cast<std::size_t>(t.face);
-    const LightProjection& view = receivers_.faces[f];
-    const GBuffer& g = receivers_.maps[f];
-    const int W = g.width, H = g.height;
-    const int ix = std::clamp(static_cast<int>(t.px), 0, W - 1), iy = std::clamp(static_cast<int>(t.py), 0, H - 1);
-    const std::size_t i = g.index(ix, iy);
-    if (g.id[i] == -1) {
-        ++outside;
-        return 0.0;
-    }
-    const Image& map = caustic_[f];
-    const double fx = std::clamp(t.px - 0.5, 0.0, W - 1.0), fy = std::clamp(t.py - 0.5, 0.0, H - 1.0);
-    const int x0 = std::min(static_cast<int>(fx), W - 2 < 0 ? 0 : W - 2), y0 = std::min(static_cast<int>(fy), H - 2 < 0 ? 0 : H - 2);
-    const int x1 = std::min(x0 + 1, W - 1), y1 = std::min(y0 + 1, H - 1);
-    const double ax = fx - x0, ay = fy - y0;
-    const double flux = (1 - ay) * ((1 - ax) * map.at(x0, y0) + ax * map.at(x1, y0)) +
-                        ay * ((1 - ax) * map.at(x0, y1) + ax * map.at(x1, y1));
-    if (flux == 0.0) return 0.0;   // no caustic here: the depth test cannot change that
-    // Shadow-map depth test with a slope-scaled bias of about two texels.
-    const glm::dvec3 to = view.type == ProjectionType::Perspective ? glm::normalize(p - view.eye) : view.forward;
-    const double c = std::max(std::abs(glm::dot(n, to)), 0.05);
-    const double texel = std::sqrt(view.texel_area()) * (view.type == ProjectionType::Perspective ? t.depth : 1.0);
-    const double bias = s_.depth_bias * 2.0 * texel * (1.0 + std::sqrt(1.0 - c * c) / c);
-    if (t.depth > g.depth[i] + bias) {
-        ++shadowed;
-        return 0.0;
-    }
-    return flux / view.surface_texel_area(p, n);
-}
-
 CausticOutput CausticMapping::render(const FrameGeometry& frame, const RenderRequest& request) {
     CausticOutput out;
     const Scene& scene = *frame.scene;
@@ -349,38 +311,18 @@ CausticOutput CausticMapping::render(const FrameGeometry& frame, const RenderReq
     clock.reset();
     const std::size_t faces = receivers_.faces.size();
     face_splats_.resize(faces);
-    for (auto& v : face_splats_) v.clear();
     // Auto radius: 2.5 grid spacings measured in caustic-map texels (sigma = 0.71 spacing), the spacing
     // being the ratio of the two light-space texel sizes (same eye: tangent sizes for point lights).
     const double ratio = std::sqrt(object_view_.texel_area() / receivers_.faces[0].texel_area());
     radius_used_ = s_.splat_radius > 0.0 ? s_.splat_radius : 2.5 * ratio;
-    // Adaptive: each splat's radius is 2.5 times the largest distance (in map texels) to the landing
-    // points of its four grid neighbours, at least the radius above, at most 64 texels: the footprint
-    // follows the local ray spacing where the light spreads (no gaps between splats, Sec. III.F).
-    const int g = s_.grid;
-    for (int y = 0; y < g; ++y)
-        for (int x = 0; x < g; ++x) {
-            const FaceSplat& fs = landing_[static_cast<std::size_t>(y) * g + x];
-            if (!(fs.splat.value > 0.0f)) continue;
-            Splat sp = fs.splat;
-            if (s_.adaptive) {
-                float spacing = 0.0f;
-                const int nb[4][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
-                for (const auto& d : nb) {
-                    const int xx = x + d[0], yy = y + d[1];
-                    if (xx < 0 || yy < 0 || xx >= g || yy >= g) continue;
-                    const FaceSplat& o = landing_[static_cast<std::size_t>(yy) * g + xx];
-                    if (!(o.splat.value > 0.0f) || o.face != fs.face) continue;
-                    spacing = std::max(spacing, glm::length(o.splat.pixel - sp.pixel));
-                }
-                sp.radius = std::clamp(2.5f * spacing, static_cast<float>(radius_used_), 64.0f);
-            }
-            face_splats_[static_cast<std::size_t>(fs.face)].push_back(sp);
-        }
+    if (s_.adaptive) radius_used_ = s_.splat_radius > 0.0 ? s_.splat_radius : 1.0;   // the adaptive minimum
+    build_splats(landing_, s_.grid, s_.adaptive ? FootprintMode::Adaptive : FootprintMode::Fixed,
+                 static_cast<float>(radius_used_), face_splats_);
     caustic_.resize(faces);
     SplatStats splat_stats;
     for (std::size_t f = 0; f < faces; ++f) {
-        caustic_[f] = Image(s_.map, s_.map);
+        if (caustic_[f].width != s_.map || caustic_[f].height != s_.map) caustic_[f] = Image(s_.map, s_.map);
+        else std::fill(caustic_[f].pixels.begin(), caustic_[f].pixels.end(), 0.0f);
         const SplatStats st = splatter_.draw(face_splats_[f], s_.splat, radius_used_, caustic_[f]);
         splat_stats.splatted += st.splatted, splat_stats.outside += st.outside, splat_stats.nonfinite += st.nonfinite;
         if (s_.lowpass >= 1.0) gaussian_lowpass(caustic_[f], s_.lowpass);
@@ -392,21 +334,20 @@ CausticOutput CausticMapping::render(const FrameGeometry& frame, const RenderReq
         clock.reset();
         const ReceiverChart& chart = *request.receiver;
         const int W = chart.width(), H = chart.height();
+        const int n = s_.bin_samples > 0 ? s_.bin_samples : auto_bin_samples(receivers_, chart);
+        prepare_receiver_lookups(receiver_lookups_, receivers_, chart, n, s_.depth_bias);
         out.receiver = Image(W, H);
+        const PreparedLookup* lookups = receiver_lookups_.lookups.data();
+        const std::size_t per_bin = static_cast<std::size_t>(n) * n;
         tbb::combinable<std::pair<std::int64_t, std::int64_t>> cnt;
         tbb::parallel_for(tbb::blocked_range<int>(0, H, 4), [&](const tbb::blocked_range<int>& rows) {
             auto& [o, sh] = cnt.local();
             for (int y = rows.begin(); y != rows.end(); ++y)
                 for (int x = 0; x < W; ++x) {
-                    // n x n stratified points per bin (n = 1: the bin centre, as the paper's per-pixel lookup).
-                    const int n = s_.bin_samples;
+                    const PreparedLookup* bin = lookups + (static_cast<std::size_t>(y) * W + x) * per_bin;
                     double sum = 0.0;
-                    for (int b = 0; b < n; ++b)
-                        for (int a = 0; a < n; ++a) {
-                            const double s = (x + (a + 0.5) / n) / W, t = (y + (b + 0.5) / n) / H;
-                            sum += irradiance(chart.point(s, t), chart.normal(s, t), o, sh);
-                        }
-                    out.receiver.at(x, y) = static_cast<float>(sum / (n * n));
+                    for (std::size_t k = 0; k < per_bin; ++k) sum += lookup_irradiance(bin[k], receivers_, caustic_, o, sh);
+                    out.receiver.at(x, y) = static_cast<float>(sum / static_cast<double>(per_bin));
                 }
         });
         cnt.combine_each([&](const auto& p) { outside += p.first, shadowed += p.second; });
@@ -415,7 +356,9 @@ CausticOutput CausticMapping::render(const FrameGeometry& frame, const RenderReq
     if (request.camera) {
         clock.reset();
         const CameraGBuffer& gb = *request.camera;
+        prepare_camera_lookups(camera_lookups_, receivers_, gb, s_.depth_bias);
         out.camera = Image(gb.width, gb.height);
+        const PreparedLookup* lookups = camera_lookups_.lookups.data();
         tbb::combinable<std::pair<std::int64_t, std::int64_t>> cnt;
         tbb::parallel_for(tbb::blocked_range<int>(0, gb.height, 4), [&](const tbb::blocked_range<int>& rows) {
             auto& [o, sh] = cnt.local();
@@ -423,8 +366,7 @@ CausticOutput CausticMapping::render(const FrameGeometry& frame, const RenderReq
                 for (int x = 0; x < gb.width; ++x) {
                     const std::size_t i = gb.index(x, y);
                     if (!gb.covered[i]) continue;
-                    out.camera.at(x, y) = static_cast<float>(
-                        irradiance(glm::dvec3(gb.position[i]), glm::dvec3(gb.normal[i]), o, sh));
+                    out.camera.at(x, y) = static_cast<float>(lookup_irradiance(lookups[i], receivers_, caustic_, o, sh));
                 }
         });
         cnt.combine_each([&](const auto& p) { outside += p.first, shadowed += p.second; });

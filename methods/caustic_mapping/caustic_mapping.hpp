@@ -23,12 +23,12 @@ struct Settings {
     EstimatorSettings estimator;
     FluxWeight flux = FluxWeight::Radiometric;
     SplatKernel splat = SplatKernel::Gaussian;
-    bool adaptive = false;         // per-splat radius from the neighbours' landing spacing
-    double splat_radius = 0.0;   // texels; 0: auto (2.5 grid spacings in caustic-map texels)
+    bool adaptive = true;          // per-splat radius from the neighbours' landing spacing (splats.hpp)
+    double splat_radius = 0.0;   // texels; 0: auto (gaussian: 2.5 grid spacings; adaptive: minimum 1)
     double lowpass = 0.0;        // texels; 0: off
     CubeMode cube = CubeMode::Auto;
     bool bilinear = true;
-    int bin_samples = 1;           // receiver map: n x n lookups per bin
+    int bin_samples = 0;           // receiver map: n x n lookups per bin; 0: auto (texels per bin side)
     int extend = 32;               // texels the receivers' positions are extrapolated past their edges
     bool absorption = true;
     double depth_bias = 1.0;

@@ -34,7 +34,7 @@ enum class EstimatorKind { Approx, Newton };
 enum class Safeguard { None, Bisection };
 
 struct EstimatorSettings {
-    EstimatorKind kind = EstimatorKind::Approx;
+    EstimatorKind kind = EstimatorKind::Newton;
     int iterations = 3;
     double d0 = 0.0;
     double eps = 0.01;          // Newton forward-difference step [m]

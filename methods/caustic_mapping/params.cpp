@@ -52,8 +52,9 @@ MethodInfo caustic_mapping_info() {
         {"grid", ParamType::Int, "128", 2, 4096, {}, "refractive vertex grid: specular positions/normals texture resolution (grid x grid)"},
         {"iterations", ParamType::Int, "3", 1, 1000, {}, "estimator iterations (updates of the distance d) per ray"},
         {"map", ParamType::Int, "768", 4, 8192, {}, "caustic-map and receiver positions texture resolution (map x map per face)"},
-        {"estimator", ParamType::Enum, "approx", 0, 0, {"approx", "newton"},
-         "approx: d <- |lookup(v + d r) - v| (Sec. III.C-D); newton: Newton-Raphson with a forward difference (appendix)"},
+        {"estimator", ParamType::Enum, "newton", 0, 0, {"approx", "newton"},
+         "approx: d <- |lookup(v + d r) - v| (Sec. III.C-D); newton: Newton-Raphson with a forward difference "
+         "(appendix; converges for oblique rays where approx at 3 iterations does not)"},
         {"d0", ParamType::Float, "0", 0.0, 1e6, {},
          "initial distance along the ray [m]; 0: start at the vertex (first lookup on its own light ray); paper: 1"},
         {"eps", ParamType::Float, "0.01", 1e-9, 10.0, {}, "Newton forward-difference step [m] (paper: 0.1)"},
@@ -63,18 +64,21 @@ MethodInfo caustic_mapping_info() {
         {"bisection_steps", ParamType::Int, "8", 1, 64, {}, "minimum bisection steps once the safeguard engages"},
         {"flux_weight", ParamType::Enum, "radiometric", 0, 0, {"radiometric", "paper"},
          "radiometric: E0 x texel area (I x solid angle) per vertex; paper: Eq. 6 (N.L)/V times the total flux"},
-        {"splat", ParamType::Enum, "gaussian", 0, 0, {"point", "gaussian", "adaptive"},
-         "point: one texel per vertex; gaussian: normalised (flux-conserving) Gaussian footprint; adaptive: "
-         "Gaussian sized by the spacing of neighbouring vertices' landing points (not in the paper)"},
+        {"splat", ParamType::Enum, "adaptive", 0, 0, {"point", "gaussian", "adaptive"},
+         "point: one texel per vertex (the paper); gaussian: normalised (flux-conserving) Gaussian footprint of a "
+         "fixed radius; adaptive: Gaussian of 1.75 x the local spacing of neighbouring vertices' landing points "
+         "(follows the ray density: sharp foci, no gaps where the light spreads; not in the paper)"},
         {"splat_radius", ParamType::Float, "0", 0.0, 100.0, {},
-         "Gaussian support in caustic-map texels (sigma = radius/3.5); 0: auto, 2.5 grid spacings"},
+         "Gaussian support in caustic-map texels (sigma = radius/3.5); 0: auto (gaussian: 2.5 grid spacings; "
+         "adaptive: the smallest footprint, 1 texel)"},
         {"lowpass", ParamType::Float, "0", 0.0, 64.0, {}, "flux-conserving Gaussian low-pass radius of the caustic map in texels; 0: off"},
         {"cube_map", ParamType::Enum, "auto", 0, 0, {"auto", "off", "on"},
          "point lights: six-face cube map for receivers (auto: when one frustum would exceed 60 degrees off-axis; off: one frustum clamped at 80)"},
         {"extend", ParamType::Int, "32", 0, 1024, {},
          "extrapolate the receivers' positions texture this many texels (at most map/8) past their edges (0: the paper's null value at edges)"},
-        {"bin_samples", ParamType::Int, "1", 1, 16, {},
-         "receiver map: n x n caustic-map lookups averaged per bin (1: the bin centre)"},
+        {"bin_samples", ParamType::Int, "0", 0, 16, {},
+         "receiver map: n x n caustic-map lookups averaged per bin (a bin holds the mean over its area); 1: the "
+         "bin centre (the paper's per-pixel lookup); 0: auto, n = caustic-map texels per bin side (at most 16)"},
         {"filter", ParamType::Enum, "bilinear", 0, 0, {"bilinear", "nearest"}, "positions texture lookups: bilinear or nearest texel"},
         {"absorption", ParamType::Bool, "true", 0, 0, {}, "Beer-Lambert absorption (Eq. 7) inside dielectrics / in the water"},
         {"depth_bias", ParamType::Float, "1.0", 0.0, 100.0, {}, "scale of the receiver lookup's slope-scaled depth bias (about two texels)"},

@@ -128,10 +128,10 @@ struct PositionsTexture {
     }
     // Light-view depth of p (in the face that holds it): the sign of depth(p) - depth(fetch(p)) says on
     // which side of the stored surface p lies (> 0: behind it, seen from the light).
+    // Every face shares the light's eye and a cube map is perspective, so the radial distance needs no face.
     double depth(const glm::dvec3& p) const {
-        const int face = cube ? cube_face_of(p - faces[0].eye) : 0;
-        const LightProjection& f = faces[static_cast<std::size_t>(face)];
-        return f.type == ProjectionType::Perspective ? glm::length(p - f.eye) : f.view(p).z;
+        const LightProjection& f = faces[0];
+        return f.type == ProjectionType::Perspective ? glm::length(p - f.eye) : glm::dot(p - f.eye, f.forward);
     }
 };
 
