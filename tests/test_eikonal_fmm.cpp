@@ -14,6 +14,7 @@
 #include "frame.hpp"
 #include "registry.hpp"
 #include "volume_grid.hpp"
+#include "volume_method_support.hpp"
 
 using namespace caustics;
 
@@ -309,59 +310,16 @@ TEST(EikonalSolver, SameSolutionOnOneAndTwoThreads) {
 
 namespace {
 
-Scene water_scene(HeightFieldDesc water, double floor_z, double floor_size) {
-    Scene scene;
-    scene.name = "test";
-    scene.path = "test.json";
-    scene.lights.push_back(Light{});
-    Object w;
-    w.name = "water";
-    w.shape = ShapeType::HeightField;
-    w.material.type = MaterialType::Dielectric;
-    w.material.ior = 1.33;
-    w.heightfield = water;
-    scene.objects.push_back(w);
-    Object floor;
-    floor.name = "floor";
-    floor.shape = ShapeType::Plane;
-    floor.center = glm::dvec3(0, 0, floor_z);
-    floor.u = glm::dvec3(floor_size, 0, 0);
-    floor.v = glm::dvec3(0, floor_size, 0);
-    scene.objects.push_back(floor);
-    scene.receiver.object = "floor";
-    scene.receiver.object_index = 1;
-    scene.receiver.width = scene.receiver.height = 32;
-    return scene;
+Scene water_scene(const HeightFieldDesc& water, double floor_z, double floor_size) {
+    return test_support::volume_test_scene(water, floor_z, floor_size);
 }
-
-HeightFieldDesc sine_desc(double amplitude, double wavelength, int resolution = 256) {
-    HeightFieldDesc d;
-    d.size = glm::dvec2(2.0);
-    d.resolution = glm::ivec2(resolution);
-    d.generator = HeightGenerator::Sine;
-    d.amplitude = amplitude;
-    d.wavelength = wavelength;
-    return d;
-}
+using test_support::sine_desc;
 
 // Renders receiver map and a small camera view; asserts finite output.
 void render_ok(const Scene& scene, std::map<std::string, std::string> params, const std::string& what) {
     const MethodInfo& info = require_method("eikonal_fmm");
-    auto method = info.create(ParamSet::resolve(info.name, info.params, params));
-    ASSERT_TRUE(method->capabilities(scene).supported) << what;
-    const FrameGeometry frame = build_frame_geometry(scene, 0);
-    method->prepare(scene);
-    method->update(frame);
-    ReceiverChart chart(frame, scene.receiver.width, scene.receiver.height);
-    CameraGBuffer gb;
-    gb.width = 8;
-    gb.height = 2;
-    gb.covered.assign(16, 1);
-    gb.object.assign(16, 1);
-    gb.normal.assign(16, glm::vec3(0, 0, 1));
-    for (int k = 0; k < 16; ++k) gb.position.push_back(glm::vec3(-0.6f + 0.08f * k, 0.1f, static_cast<float>(scene.objects[1].center.z)));
-    RenderRequest request{&chart, &gb};
-    CausticOutput out = method->render(frame, request);
+    ASSERT_TRUE(info.create(ParamSet::resolve(info.name, info.params, params))->capabilities(scene).supported) << what;
+    const CausticOutput out = test_support::render_volume_method("eikonal_fmm", scene, params, 16);
     ASSERT_EQ(out.receiver.width, scene.receiver.width) << what;
     double sum = 0.0;
     for (float v : out.receiver.pixels) {

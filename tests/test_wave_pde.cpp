@@ -18,6 +18,7 @@
 #include "frame.hpp"
 #include "registry.hpp"
 #include "volume_grid.hpp"
+#include "volume_method_support.hpp"
 
 using namespace caustics;
 
@@ -280,57 +281,15 @@ TEST(WaveMethod, CourantAboveBoundIsRefused) {
 
 namespace {
 
-Scene water_scene(HeightFieldDesc water, double floor_z, double floor_size) {
-    Scene scene;
-    scene.name = "test";
-    scene.path = "test.json";
-    scene.lights.push_back(Light{});
-    Object w;
-    w.name = "water";
-    w.shape = ShapeType::HeightField;
-    w.material.type = MaterialType::Dielectric;
-    w.material.ior = 1.33;
-    w.heightfield = water;
-    scene.objects.push_back(w);
-    Object floor;
-    floor.name = "floor";
-    floor.shape = ShapeType::Plane;
-    floor.center = glm::dvec3(0, 0, floor_z);
-    floor.u = glm::dvec3(floor_size, 0, 0);
-    floor.v = glm::dvec3(0, floor_size, 0);
-    scene.objects.push_back(floor);
-    scene.receiver.object = "floor";
-    scene.receiver.object_index = 1;
-    scene.receiver.width = scene.receiver.height = 32;
-    return scene;
+Scene water_scene(const HeightFieldDesc& water, double floor_z, double floor_size) {
+    return test_support::volume_test_scene(water, floor_z, floor_size);
 }
-
-HeightFieldDesc sine_desc(double amplitude, double wavelength, int resolution = 256) {
-    HeightFieldDesc d;
-    d.size = glm::dvec2(2.0);
-    d.resolution = glm::ivec2(resolution);
-    d.generator = HeightGenerator::Sine;
-    d.amplitude = amplitude;
-    d.wavelength = wavelength;
-    return d;
-}
+using test_support::sine_desc;
 
 CausticOutput render(const Scene& scene, std::map<std::string, std::string> params, const std::string& what) {
     const MethodInfo& info = require_method("wave_pde");
-    auto method = info.create(ParamSet::resolve(info.name, info.params, params));
-    EXPECT_TRUE(method->capabilities(scene).supported) << what;
-    const FrameGeometry frame = build_frame_geometry(scene, 0);
-    method->update(frame);
-    ReceiverChart chart(frame, scene.receiver.width, scene.receiver.height);
-    CameraGBuffer gb;
-    gb.width = 8;
-    gb.height = 1;
-    gb.covered.assign(8, 1);
-    gb.object.assign(8, 1);
-    gb.normal.assign(8, glm::vec3(0, 0, 1));
-    for (int k = 0; k < 8; ++k) gb.position.push_back(glm::vec3(-0.6f + 0.16f * k, 0.0f, static_cast<float>(scene.objects[1].center.z)));
-    RenderRequest request{&chart, &gb};
-    CausticOutput out = method->render(frame, request);
+    EXPECT_TRUE(info.create(ParamSet::resolve(info.name, info.params, params))->capabilities(scene).supported) << what;
+    CausticOutput out = test_support::render_volume_method("wave_pde", scene, params, 8);
     EXPECT_EQ(out.receiver.width, scene.receiver.width) << what;
     for (float v : out.receiver.pixels) EXPECT_TRUE(std::isfinite(v) && v >= 0.0f) << what;
     for (float v : out.camera.pixels) EXPECT_TRUE(std::isfinite(v)) << what;
