@@ -19,39 +19,16 @@
 #include "ray_tracer.hpp"
 #include "receiver_chart.hpp"
 #include "registry.hpp"
+#include "pool_cube.hpp"
 #include "scene.hpp"
 
 using namespace caustics;
 
 namespace {
 
-struct PoolCube {
-    Scene scene;
-    std::unique_ptr<FrameGeometry> frame;
-    std::unique_ptr<ReceiverChart> chart;
-    std::unique_ptr<CameraGBuffer> gbuffer;
-};
-
-PoolCube& pool() {
-    static PoolCube p = [] {
-        PoolCube c;
-        c.scene = load_scene(std::string(CAUSTICS_SOURCE_DIR) + "/scenes/pool.json");
-        for (Object& o : c.scene.objects)
-            if (o.name == "floor") o.center.z = -2.0;
-        c.frame = std::make_unique<FrameGeometry>(build_frame_geometry(c.scene, 0));
-        c.chart = std::make_unique<ReceiverChart>(*c.frame, c.scene.receiver.width, c.scene.receiver.height);
-        RayTracer tracer(*c.frame);
-        c.gbuffer = std::make_unique<CameraGBuffer>(build_camera_gbuffer(tracer, c.scene.camera));
-        return c;
-    }();
-    return p;
-}
-
-double maxrss_mb() {
-    rusage u{};
-    getrusage(RUSAGE_SELF, &u);
-    return u.ru_maxrss / 1024.0;
-}
+using bench::PoolCube;
+using bench::maxrss_mb;
+PoolCube& pool() { return bench::pool_cube(); }
 
 std::unique_ptr<Method> make(std::map<std::string, std::string> params) {
     const MethodInfo& info = require_method("wave_pde");

@@ -1,0 +1,46 @@
+#pragma once
+// The set-up of the 3-D caustic texture benchmarks (Mercier 2013, Table 1): pool.json with its floor
+// moved to z = -2, so that the 2 m x 2 m water volume is a cube of grid^3 cells, with its receiver chart
+// and camera G-buffer; and the process's peak resident memory.
+#include <sys/resource.h>
+
+#include <memory>
+#include <string>
+
+#include "camera.hpp"
+#include "frame.hpp"
+#include "ray_tracer.hpp"
+#include "receiver_chart.hpp"
+#include "scene.hpp"
+
+namespace caustics::bench {
+
+struct PoolCube {
+    Scene scene;
+    std::unique_ptr<FrameGeometry> frame;
+    std::unique_ptr<ReceiverChart> chart;
+    std::unique_ptr<CameraGBuffer> gbuffer;
+};
+
+inline PoolCube& pool_cube() {
+    static PoolCube p = [] {
+        PoolCube c;
+        c.scene = load_scene(std::string(CAUSTICS_SOURCE_DIR) + "/scenes/pool.json");
+        for (Object& o : c.scene.objects)
+            if (o.name == "floor") o.center.z = -2.0;
+        c.frame = std::make_unique<FrameGeometry>(build_frame_geometry(c.scene, 0));
+        c.chart = std::make_unique<ReceiverChart>(*c.frame, c.scene.receiver.width, c.scene.receiver.height);
+        RayTracer tracer(*c.frame);
+        c.gbuffer = std::make_unique<CameraGBuffer>(build_camera_gbuffer(tracer, c.scene.camera));
+        return c;
+    }();
+    return p;
+}
+
+inline double maxrss_mb() {
+    rusage u{};
+    getrusage(RUSAGE_SELF, &u);
+    return static_cast<double>(u.ru_maxrss) / 1024.0;
+}
+
+}  // namespace caustics::bench
