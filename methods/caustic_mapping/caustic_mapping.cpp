@@ -10,7 +10,7 @@
 //      low-pass;
 //   4. receiver map and camera view: project each point into the light view, depth test against the
 //      receivers' texture, read the caustic map, divide by the receiver area of a texel -> irradiance
-//      (lookup.hpp: every render prepares its points, then reads the map).
+//      (lookup.hpp: every point is looked up on the fly, in every render).
 #include "caustic_mapping.hpp"
 
 #include <algorithm>
@@ -85,7 +85,7 @@ private:
     std::vector<std::vector<Splat>> face_splats_;
     std::vector<Image> caustic_;    // per face: flux per texel [W]
     double radius_used_ = 0.0;
-    LookupSet receiver_lookups_, camera_lookups_;
+    ReceiverScratch receiver_scratch_;   // refilled by every render
 };
 
 Capability CausticMapping::capabilities(const Scene& scene) const {
@@ -329,47 +329,18 @@ CausticOutput CausticMapping::render(const FrameGeometry& frame, const RenderReq
     }
     out.stages_ms.emplace_back("splat", clock.ms());
 
-    std::int64_t outside = 0, shadowed = 0;
+    LookupCounts looked;
     if (request.receiver) {
         clock.reset();
         const ReceiverChart& chart = *request.receiver;
-        const int W = chart.width(), H = chart.height();
         const int n = s_.bin_samples > 0 ? s_.bin_samples : auto_bin_samples(receivers_, chart);
-        prepare_receiver_lookups(receiver_lookups_, receivers_, chart, n, s_.depth_bias);
-        out.receiver = Image(W, H);
-        const PreparedLookup* lookups = receiver_lookups_.lookups.data();
-        const std::size_t per_bin = static_cast<std::size_t>(n) * n;
-        tbb::combinable<std::pair<std::int64_t, std::int64_t>> cnt;
-        tbb::parallel_for(tbb::blocked_range<int>(0, H, 4), [&](const tbb::blocked_range<int>& rows) {
-            auto& [o, sh] = cnt.local();
-            for (int y = rows.begin(); y != rows.end(); ++y)
-                for (int x = 0; x < W; ++x) {
-                    const PreparedLookup* bin = lookups + (static_cast<std::size_t>(y) * W + x) * per_bin;
-                    double sum = 0.0;
-                    for (std::size_t k = 0; k < per_bin; ++k) sum += lookup_irradiance(bin[k], receivers_, caustic_, o, sh);
-                    out.receiver.at(x, y) = static_cast<float>(sum / static_cast<double>(per_bin));
-                }
-        });
-        cnt.combine_each([&](const auto& p) { outside += p.first, shadowed += p.second; });
+        receiver_irradiance(out.receiver, receiver_scratch_, receivers_, caustic_, chart, n, s_.depth_bias, looked);
         out.stages_ms.emplace_back("receiver_lookup", clock.ms());
     }
     if (request.camera) {
         clock.reset();
         const CameraGBuffer& gb = *request.camera;
-        prepare_camera_lookups(camera_lookups_, receivers_, gb, s_.depth_bias);
-        out.camera = Image(gb.width, gb.height);
-        const PreparedLookup* lookups = camera_lookups_.lookups.data();
-        tbb::combinable<std::pair<std::int64_t, std::int64_t>> cnt;
-        tbb::parallel_for(tbb::blocked_range<int>(0, gb.height, 4), [&](const tbb::blocked_range<int>& rows) {
-            auto& [o, sh] = cnt.local();
-            for (int y = rows.begin(); y != rows.end(); ++y)
-                for (int x = 0; x < gb.width; ++x) {
-                    const std::size_t i = gb.index(x, y);
-                    if (!gb.covered[i]) continue;
-                    out.camera.at(x, y) = static_cast<float>(lookup_irradiance(lookups[i], receivers_, caustic_, o, sh));
-                }
-        });
-        cnt.combine_each([&](const auto& p) { outside += p.first, shadowed += p.second; });
+        camera_irradiance(out.camera, receivers_, caustic_, gb, s_.depth_bias, looked);
         out.stages_ms.emplace_back("camera_lookup", clock.ms());
     }
     if (s_.debug_maps) {
@@ -391,8 +362,8 @@ CausticOutput CausticMapping::render(const FrameGeometry& frame, const RenderReq
     h.add("splats_outside_map", splat_stats.outside + c.lost_outside);
     h.add("nonfinite", c.nonfinite + splat_stats.nonfinite);
     h.add("estimator_lookups", c.lookups);
-    h.add("lookups_outside_map", outside);
-    h.add("shadowed_lookups", shadowed);   // failed the depth test where the map holds caustic flux
+    h.add("lookups_outside_map", looked.outside);
+    h.add("shadowed_lookups", looked.shadowed);   // failed the depth test where the map holds caustic flux
     h.add("clipped_triangles", clipped);
     h.add("cube_map", receivers_.cube ? 1 : 0);
     return out;

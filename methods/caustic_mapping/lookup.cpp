@@ -1,41 +1,272 @@
 #include "lookup.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <utility>
 
 #include <tbb/blocked_range.h>
+#include <tbb/combinable.h>
 #include <tbb/parallel_for.h>
 
 namespace caustics::caustic_mapping {
+namespace {
 
-PreparedLookup prepare_lookup(const PositionsTexture& receivers, const glm::dvec3& p, const glm::dvec3& n,
-                              double depth_bias) {
-    PreparedLookup l;
-    Texel t;
-    if (!receivers.locate(p, t)) return l;
-    const std::size_t f = static_cast<std::size_t>(t.face);
-    const LightProjection& view = receivers.faces[f];
-    const GBuffer& g = receivers.maps[f];
-    const int W = g.width, H = g.height;
-    const int ix = std::clamp(static_cast<int>(t.px), 0, W - 1), iy = std::clamp(static_cast<int>(t.py), 0, H - 1);
-    l.face = static_cast<std::uint32_t>(f);
-    l.texel = static_cast<std::uint32_t>(g.index(ix, iy));
-    // Bilinear between texel centres, clamped at the borders (x0 <= W - 2: the map is at least 2 wide).
-    const double fx = std::clamp(t.px - 0.5, 0.0, W - 1.0), fy = std::clamp(t.py - 0.5, 0.0, H - 1.0);
-    const int x0 = std::min(static_cast<int>(fx), W - 2), y0 = std::min(static_cast<int>(fy), H - 2);
-    l.corner = static_cast<std::uint32_t>(g.index(x0, y0));
-    l.ax = static_cast<float>(fx - x0);
-    l.ay = static_cast<float>(fy - y0);
-    // Shadow-map depth test with a slope-scaled bias of about two texels.
-    const glm::dvec3 to = view.type == ProjectionType::Perspective ? glm::normalize(p - view.eye) : view.forward;
-    const double c = std::max(std::abs(glm::dot(n, to)), 0.05);
-    const double texel = std::sqrt(view.texel_area()) * (view.type == ProjectionType::Perspective ? t.depth : 1.0);
-    const double bias = depth_bias * 2.0 * texel * (1.0 + std::sqrt(1.0 - c * c) / c);
-    l.depth = static_cast<float>(t.depth - bias);
-    l.inv_area = static_cast<float>(1.0 / view.surface_texel_area(p, n));
-    return l;
+// One light-view face with its per-point constants hoisted: the projection as multiplications, the
+// texel side for the depth bias, and the face's G-buffer and caustic map.
+struct Face {
+    const GBuffer* g = nullptr;
+    const float* map = nullptr;
+    glm::dvec3 eye{0.0}, right{1, 0, 0}, up{0, 1, 0}, forward{0, 0, -1};
+    double x0 = 0, y1 = 0, sx = 1, sy = 1;   // px = (x - x0) sx, py = (y1 - y) sy
+    double near_depth = 0;
+    double bias_unit = 0;       // depth_bias * two texel sides (perspective: at unit depth)
+    double inv_texel_area = 0;  // 1 / LightProjection::texel_area()
+    int width = 1, height = 1;
+};
+
+struct Faces {
+    std::array<Face, 6> face;
+    bool cube = false;
+    bool perspective = false;
+};
+
+Faces hoist(const PositionsTexture& receivers, const std::vector<Image>& caustic, double depth_bias) {
+    Faces fs;
+    fs.cube = receivers.cube;
+    fs.perspective = receivers.faces[0].type == ProjectionType::Perspective;
+    for (std::size_t f = 0; f < receivers.faces.size() && f < fs.face.size(); ++f) {
+        const LightProjection& v = receivers.faces[f];
+        Face& o = fs.face[f];
+        o.g = &receivers.maps[f];
+        o.map = caustic[f].pixels.data();
+        o.eye = v.eye, o.right = v.right, o.up = v.up, o.forward = v.forward;
+        o.x0 = v.x0, o.y1 = v.y1;
+        o.sx = v.width / (v.x1 - v.x0), o.sy = v.height / (v.y1 - v.y0);
+        o.near_depth = v.near_depth;
+        o.bias_unit = depth_bias * 2.0 * std::sqrt(v.texel_area());
+        o.inv_texel_area = 1.0 / v.texel_area();
+        o.width = v.width, o.height = v.height;
+    }
+    return fs;
 }
+
+// Irradiance at a receiver point given by its coordinates v = (x, y, depth) in face f's view space;
+// `normal()` gives its unit normal (world space) and is called only where the caustic map holds flux (the
+// depth bias and the texel area need it).
+template <bool kPerspective, class NormalFn>
+inline double irradiance_in_view(const Face& f, const glm::dvec3& v, NormalFn&& normal, LookupCounts& counts) {
+    const double depth = v.z;
+    double x = v.x, y = v.y, inv_depth = 1.0;
+    if constexpr (kPerspective) {
+        if (!(depth > f.near_depth)) {
+            ++counts.outside;
+            return 0.0;
+        }
+        inv_depth = 1.0 / depth;
+        x *= inv_depth;
+        y *= inv_depth;
+    }
+    const double px = (x - f.x0) * f.sx, py = (f.y1 - y) * f.sy;
+    const int W = f.width, H = f.height;
+    if (!(px >= 0.0 && py >= 0.0 && px <= W && py <= H)) {
+        ++counts.outside;
+        return 0.0;
+    }
+    const GBuffer& g = *f.g;
+    const std::size_t texel = g.index(std::min(static_cast<int>(px), W - 1), std::min(static_cast<int>(py), H - 1));
+    if (g.id[texel] == -1) {
+        ++counts.outside;
+        return 0.0;
+    }
+    // Bilinear between texel centres, clamped at the borders (x0 <= W - 2: the map is at least 2 wide).
+    const double fx = std::clamp(px - 0.5, 0.0, W - 1.0), fy = std::clamp(py - 0.5, 0.0, H - 1.0);
+    const int x0 = std::min(static_cast<int>(fx), W - 2), y0 = std::min(static_cast<int>(fy), H - 2);
+    const float ax = static_cast<float>(fx - x0), ay = static_cast<float>(fy - y0);
+    const float* m = f.map + g.index(x0, y0);
+    const std::size_t w = static_cast<std::size_t>(W);
+    const float top = m[0] + ax * (m[1] - m[0]);
+    const float bottom = m[w] + ax * (m[w + 1] - m[w]);
+    const float flux = top + ay * (bottom - top);
+    if (flux == 0.0f) return 0.0;   // no caustic here: the depth test cannot change that
+    // Shadow-map depth test with a slope-scaled bias of about two texels: bias = k (1 + tan(angle of
+    // incidence)), k >= 0 two texels (at this depth, in perspective). The slope term is evaluated only
+    // when the smallest bias (tan = 0) does not already pass the test.
+    const glm::dvec3 n = normal();
+    double nd, k = f.bias_unit, r2 = 0.0;
+    if constexpr (kPerspective) {
+        nd = std::abs(glm::dot(n, f.right) * v.x + glm::dot(n, f.up) * v.y + glm::dot(n, f.forward) * v.z);
+        r2 = glm::dot(v, v);
+        k *= depth;
+    } else {
+        nd = std::abs(glm::dot(n, f.forward));
+    }
+    const float stored = g.depth[texel];
+    if (static_cast<float>(depth - k) > stored) {
+        const double c = std::max(kPerspective ? nd / std::sqrt(r2) : nd, 0.05);
+        if (static_cast<float>(depth - k * (1.0 + std::sqrt(1.0 - c * c) / c)) > stored) {
+            ++counts.shadowed;
+            return 0.0;
+        }
+    }
+    // 1 / receiver area of one texel (LightProjection::surface_texel_area, cosine clamped at 1e-3):
+    // orthographic A / cos; perspective (solid angle A z^3 / r^3) * r^2 / cos = A z^3 / |n . d|.
+    double inv_area;
+    if constexpr (kPerspective) {
+        const double cosine_r = nd * nd >= 1e-6 * r2 ? nd : 1e-3 * std::sqrt(r2);
+        inv_area = cosine_r * f.inv_texel_area * (inv_depth * inv_depth * inv_depth);
+    } else {
+        inv_area = std::max(nd, 1e-3) * f.inv_texel_area;
+    }
+    return static_cast<double>(flux) * static_cast<float>(inv_area);
+}
+
+glm::dvec3 to_view(const Face& f, const glm::dvec3& p) {
+    const glm::dvec3 d = p - f.eye;
+    return {glm::dot(d, f.right), glm::dot(d, f.up), glm::dot(d, f.forward)};
+}
+
+// Irradiance at world point p.
+template <bool kPerspective, class NormalFn>
+inline double irradiance_at(const Faces& fs, const glm::dvec3& p, NormalFn&& normal, LookupCounts& counts) {
+    const Face& f = fs.face[fs.cube ? static_cast<std::size_t>(cube_face_of(p - fs.face[0].eye)) : 0];
+    return irradiance_in_view<kPerspective>(f, to_view(f, p), normal, counts);
+}
+
+// The chart's bin corners, (W + 1) x (H + 1), row-major: in the view space of the single face (the view
+// transform is affine, so interpolating there is interpolating in the world), or world points for a cube
+// map (`view` null), whose samples pick their face one by one.
+void fill_corners(std::vector<glm::dvec3>& corners, const ReceiverChart& chart, const Face* view) {
+    const int W = chart.width(), H = chart.height();
+    corners.resize(static_cast<std::size_t>(W + 1) * static_cast<std::size_t>(H + 1));
+    tbb::parallel_for(tbb::blocked_range<int>(0, H + 1, 8), [&](const tbb::blocked_range<int>& rows) {
+        for (int j = rows.begin(); j != rows.end(); ++j)
+            for (int i = 0; i <= W; ++i) {
+                const glm::dvec3 p = chart.point(static_cast<double>(i) / W, static_cast<double>(j) / H);
+                corners[static_cast<std::size_t>(j) * (W + 1) + i] = view ? to_view(*view, p) : p;
+            }
+    });
+}
+
+// Summed-area tables ((W + 1) x (H + 1)) of the single face's texels that hold caustic flux and of its
+// texels with no receiver: a bin whose light-space footprint holds neither needs no lookup, since each of
+// its lookups would read four zero texels and count nothing.
+struct Footprints {
+    const std::int32_t* flux = nullptr;
+    const std::int32_t* empty = nullptr;
+    int stride = 0;
+    std::int32_t count(const std::int32_t* sat, int x0, int y0, int x1, int y1) const {   // texels [x0, x1] x [y0, y1]
+        const std::size_t s = static_cast<std::size_t>(stride);
+        return sat[(y1 + 1) * s + x1 + 1] - sat[y0 * s + x1 + 1] - sat[(y1 + 1) * s + x0] + sat[y0 * s + x0];
+    }
+};
+
+Footprints fill_footprints(ReceiverScratch& scratch, const Face& f) {
+    const int W = f.width, H = f.height;
+    const std::size_t stride = static_cast<std::size_t>(W) + 1;
+    scratch.flux_sat.assign(stride * (static_cast<std::size_t>(H) + 1), 0);
+    scratch.empty_sat.assign(stride * (static_cast<std::size_t>(H) + 1), 0);
+    std::int32_t* flux = scratch.flux_sat.data();
+    std::int32_t* empty = scratch.empty_sat.data();
+    tbb::parallel_for(tbb::blocked_range<int>(0, H, 16), [&](const tbb::blocked_range<int>& rows) {
+        for (int y = rows.begin(); y != rows.end(); ++y) {
+            const float* m = f.map + f.g->index(0, y);
+            const std::int32_t* id = &f.g->id[f.g->index(0, y)];
+            std::int32_t* fr = flux + (y + 1) * stride;
+            std::int32_t* er = empty + (y + 1) * stride;
+            for (int x = 0; x < W; ++x) {
+                fr[x + 1] = fr[x] + (m[x] != 0.0f);
+                er[x + 1] = er[x] + (id[x] == -1);
+            }
+        }
+    });
+    for (int y = 1; y <= H; ++y)
+        for (std::size_t x = 0; x < stride; ++x) {
+            flux[y * stride + x] += flux[(y - 1) * stride + x];
+            empty[y * stride + x] += empty[(y - 1) * stride + x];
+        }
+    return {flux, empty, static_cast<int>(stride)};
+}
+
+// True when bin (corners c[0..3], view space of face f) certainly gets no caustic: all its points lie in
+// the view (perspective: in front of the eye) and its footprint holds no flux and no empty texel. The
+// points of the bin are convex combinations of its corners (in homogeneous coordinates, in perspective),
+// so they project inside the corners' bounding box; one texel of padding covers the bilinear reads.
+template <bool kPerspective>
+bool bin_without_caustic(const Face& f, const Footprints& fp, const glm::dvec3* const c[4]) {
+    double xl = 1e300, xh = -1e300, yl = 1e300, yh = -1e300;
+    for (int k = 0; k < 4; ++k) {
+        double x = c[k]->x, y = c[k]->y;
+        if constexpr (kPerspective) {
+            if (!(c[k]->z > f.near_depth)) return false;
+            x /= c[k]->z;
+            y /= c[k]->z;
+        }
+        const double px = (x - f.x0) * f.sx, py = (f.y1 - y) * f.sy;
+        xl = std::min(xl, px), xh = std::max(xh, px), yl = std::min(yl, py), yh = std::max(yh, py);
+    }
+    constexpr double kMargin = 1e-6;   // texels: round-off of the interpolated points
+    if (!(xl > kMargin && yl > kMargin && xh < f.width - kMargin && yh < f.height - kMargin)) return false;
+    const int x0 = std::max(static_cast<int>(xl) - 1, 0), x1 = std::min(static_cast<int>(xh) + 1, f.width - 1);
+    const int y0 = std::max(static_cast<int>(yl) - 1, 0), y1 = std::min(static_cast<int>(yh) + 1, f.height - 1);
+    return fp.count(fp.flux, x0, y0, x1, y1) == 0 && fp.count(fp.empty, x0, y0, x1, y1) == 0;
+}
+
+template <bool kPerspective>
+void receiver_pass(Image& out, const std::vector<glm::dvec3>& corners, const Faces& fs, const Footprints& fp,
+                   const ReceiverChart& chart, int n, LookupCounts& counts) {
+    const int W = chart.width(), H = chart.height();
+    const double inv_n = 1.0 / n, per_bin = static_cast<double>(n) * n, inv_w = 1.0 / W;
+    tbb::combinable<LookupCounts> local;
+    tbb::parallel_for(tbb::blocked_range<int>(0, H, 4), [&](const tbb::blocked_range<int>& rows) {
+        LookupCounts& c = local.local();
+        for (int y = rows.begin(); y != rows.end(); ++y) {
+            const glm::dvec3* lo = &corners[static_cast<std::size_t>(y) * (W + 1)];
+            const glm::dvec3* hi = lo + (W + 1);
+            for (int x = 0; x < W; ++x) {
+                const glm::dvec3* const bin[4] = {&lo[x], &lo[x + 1], &hi[x], &hi[x + 1]};
+                if (!fs.cube && bin_without_caustic<kPerspective>(fs.face[0], fp, bin)) continue;   // 0 already
+                // The bin's points by bilinear interpolation of its four corners: exact for a plane (the
+                // chart is affine there), a small-footprint approximation of a height field's surface
+                // within one bin. The perspective divide is done per point, so a perspective view of a
+                // plane stays exact. Normals come from the chart itself, where they are needed.
+                double sum = 0.0;
+                for (int b = 0; b < n; ++b) {
+                    const double v = (b + 0.5) * inv_n;
+                    const glm::dvec3 left = lo[x] + v * (hi[x] - lo[x]);
+                    const glm::dvec3 step = (lo[x + 1] + v * (hi[x + 1] - lo[x + 1]) - left) * inv_n;
+                    const double t = (y + v) / H;
+                    for (int a = 0; a < n; ++a) {
+                        const glm::dvec3 q = left + (a + 0.5) * step;   // view space, or world (cube)
+                        auto normal = [&] { return chart.normal((x + (a + 0.5) * inv_n) * inv_w, t); };
+                        sum += fs.cube ? irradiance_at<kPerspective>(fs, q, normal, c)
+                                       : irradiance_in_view<kPerspective>(fs.face[0], q, normal, c);
+                    }
+                }
+                out.at(x, y) = static_cast<float>(sum / per_bin);
+            }
+        }
+    });
+    local.combine_each([&](const LookupCounts& c) { counts.outside += c.outside, counts.shadowed += c.shadowed; });
+}
+
+template <bool kPerspective>
+void camera_pass(Image& out, const Faces& fs, const CameraGBuffer& gb, LookupCounts& counts) {
+    tbb::combinable<LookupCounts> local;
+    tbb::parallel_for(tbb::blocked_range<int>(0, gb.height, 4), [&](const tbb::blocked_range<int>& rows) {
+        LookupCounts& c = local.local();
+        for (int y = rows.begin(); y != rows.end(); ++y)
+            for (int x = 0; x < gb.width; ++x) {
+                const std::size_t i = gb.index(x, y);
+                if (!gb.covered[i]) continue;
+                auto normal = [&] { return glm::dvec3(gb.normal[i]); };
+                out.at(x, y) = static_cast<float>(irradiance_at<kPerspective>(fs, glm::dvec3(gb.position[i]), normal, c));
+            }
+    });
+    local.combine_each([&](const LookupCounts& c) { counts.outside += c.outside, counts.shadowed += c.shadowed; });
+}
+
+}  // namespace
 
 int auto_bin_samples(const PositionsTexture& receivers, const ReceiverChart& chart) {
     double ratio = 1.0;
@@ -51,35 +282,23 @@ int auto_bin_samples(const PositionsTexture& receivers, const ReceiverChart& cha
     return std::clamp(static_cast<int>(std::ceil(ratio - 1e-6)), 1, 16);
 }
 
-void prepare_receiver_lookups(LookupSet& set, const PositionsTexture& receivers,
-                              const ReceiverChart& chart, int n, double depth_bias) {
-    const int W = chart.width(), H = chart.height();
-    const std::size_t per_bin = static_cast<std::size_t>(n) * n;
-    set.lookups.resize(static_cast<std::size_t>(W) * H * per_bin);
-    tbb::parallel_for(tbb::blocked_range<int>(0, H, 4), [&](const tbb::blocked_range<int>& rows) {
-        for (int y = rows.begin(); y != rows.end(); ++y)
-            for (int x = 0; x < W; ++x) {
-                PreparedLookup* bin = &set.lookups[(static_cast<std::size_t>(y) * W + x) * per_bin];
-                for (int b = 0; b < n; ++b)
-                    for (int a = 0; a < n; ++a) {
-                        const double s = (x + (a + 0.5) / n) / W, t = (y + (b + 0.5) / n) / H;
-                        bin[b * n + a] = prepare_lookup(receivers, chart.point(s, t), chart.normal(s, t), depth_bias);
-                    }
-            }
-    });
+void receiver_irradiance(Image& out, ReceiverScratch& scratch, const PositionsTexture& receivers,
+                         const std::vector<Image>& caustic, const ReceiverChart& chart, int n, double depth_bias,
+                         LookupCounts& counts) {
+    const Faces fs = hoist(receivers, caustic, depth_bias);
+    out = Image(chart.width(), chart.height());   // bins without caustic are skipped: 0
+    fill_corners(scratch.corners, chart, fs.cube ? nullptr : &fs.face[0]);
+    const Footprints fp = fs.cube ? Footprints{} : fill_footprints(scratch, fs.face[0]);
+    if (fs.perspective) receiver_pass<true>(out, scratch.corners, fs, fp, chart, n, counts);
+    else receiver_pass<false>(out, scratch.corners, fs, fp, chart, n, counts);
 }
 
-void prepare_camera_lookups(LookupSet& set, const PositionsTexture& receivers,
-                            const CameraGBuffer& gb, double depth_bias) {
-    set.lookups.assign(static_cast<std::size_t>(gb.width) * gb.height, PreparedLookup{});
-    tbb::parallel_for(tbb::blocked_range<int>(0, gb.height, 4), [&](const tbb::blocked_range<int>& rows) {
-        for (int y = rows.begin(); y != rows.end(); ++y)
-            for (int x = 0; x < gb.width; ++x) {
-                const std::size_t i = gb.index(x, y);
-                if (gb.covered[i])
-                    set.lookups[i] = prepare_lookup(receivers, glm::dvec3(gb.position[i]), glm::dvec3(gb.normal[i]), depth_bias);
-            }
-    });
+void camera_irradiance(Image& out, const PositionsTexture& receivers, const std::vector<Image>& caustic,
+                       const CameraGBuffer& gb, double depth_bias, LookupCounts& counts) {
+    const Faces fs = hoist(receivers, caustic, depth_bias);
+    out = Image(gb.width, gb.height);   // pixels without a diffuse hit: 0
+    if (fs.perspective) camera_pass<true>(out, fs, gb, counts);
+    else camera_pass<false>(out, fs, gb, counts);
 }
 
 }  // namespace caustics::caustic_mapping

@@ -57,7 +57,8 @@ inline void extend_positions(GBuffer& g, int texels) {
             extend_line(W, a, b, [&](int k) { return g.index(k, y); });
         }
     });
-    // Columns: outermost covered rows per column from a row-major sweep over blocks of columns.
+    // Columns: outermost covered rows per column, for blocks of columns, from row-major sweeps down from
+    // the top and up from the bottom that stop once every column of the block has found its row.
     constexpr int kBlock = 64;
     tbb::parallel_for(tbb::blocked_range<int>(0, (W + kBlock - 1) / kBlock, 1), [&](const tbb::blocked_range<int>& r) {
         int first[kBlock], last[kBlock];
@@ -65,13 +66,17 @@ inline void extend_positions(GBuffer& g, int texels) {
             const int x0 = blk * kBlock, x1 = std::min(W, x0 + kBlock);
             std::fill(first, first + kBlock, -1);
             std::fill(last, last + kBlock, -1);
-            for (int y = 0; y < H; ++y) {
+            int missing = x1 - x0;
+            for (int y = 0; y < H && missing > 0; ++y) {
                 const std::int32_t* id = &g.id[g.index(0, y)];
                 for (int x = x0; x < x1; ++x)
-                    if (id[x] != -1) {
-                        if (first[x - x0] < 0) first[x - x0] = y;
-                        last[x - x0] = y;
-                    }
+                    if (first[x - x0] < 0 && id[x] != -1) first[x - x0] = y, --missing;
+            }
+            missing = static_cast<int>(std::count_if(first, first + (x1 - x0), [](int f) { return f >= 0; }));
+            for (int y = H - 1; y >= 0 && missing > 0; --y) {
+                const std::int32_t* id = &g.id[g.index(0, y)];
+                for (int x = x0; x < x1; ++x)
+                    if (last[x - x0] < 0 && first[x - x0] >= 0 && id[x] != -1) last[x - x0] = y, --missing;
             }
             for (int x = x0; x < x1; ++x)
                 extend_line(H, first[x - x0], last[x - x0], [&](int k) { return g.index(x, k); });
