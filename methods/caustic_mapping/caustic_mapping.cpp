@@ -316,7 +316,7 @@ CausticOutput CausticMapping::render(const FrameGeometry& frame, const RenderReq
     const double ratio = std::sqrt(object_view_.texel_area() / receivers_.faces[0].texel_area());
     radius_used_ = s_.splat_radius > 0.0 ? s_.splat_radius : 2.5 * ratio;
     if (s_.adaptive) radius_used_ = s_.splat_radius > 0.0 ? s_.splat_radius : 1.0;   // the adaptive minimum
-    build_splats(landing_, s_.grid, s_.adaptive ? FootprintMode::Adaptive : FootprintMode::Fixed,
+    const int isolated_splats = build_splats(landing_, s_.grid, s_.adaptive ? FootprintMode::Adaptive : FootprintMode::Fixed,
                  static_cast<float>(radius_used_), face_splats_);
     caustic_.resize(faces);
     SplatStats splat_stats;
@@ -359,6 +359,7 @@ CausticOutput CausticMapping::render(const FrameGeometry& frame, const RenderReq
     h.add("total_internal_reflections", c.tir);
     h.add("grazing_texels", c.grazing);
     h.add("splats", splat_stats.splatted);
+    h.add("isolated_splats", isolated_splats);   // adaptive footprint with no landed neighbour: minimum size
     h.add("splats_outside_map", splat_stats.outside + c.lost_outside);
     h.add("nonfinite", c.nonfinite + splat_stats.nonfinite);
     h.add("estimator_lookups", c.lookups);

@@ -7,18 +7,19 @@
 
 namespace caustics::caustic_mapping {
 
-void build_splats(const std::vector<FaceSplat>& landing, int grid, FootprintMode mode, float radius,
-                  std::vector<std::vector<Splat>>& per_face) {
+int build_splats(const std::vector<FaceSplat>& landing, int grid, FootprintMode mode, float radius,
+                 std::vector<std::vector<Splat>>& per_face) {
     for (auto& v : per_face) v.clear();
     const int g = grid;
+    int isolated = 0;
     // The landing point of texel (x, y) when it lands on `face`, else null.
     auto at = [&](int x, int y, int face) -> const Splat* {
         if (x < 0 || y < 0 || x >= g || y >= g) return nullptr;
         const FaceSplat& o = landing[static_cast<std::size_t>(y) * g + x];
         return o.splat.value > 0.0f && o.face == face ? &o.splat : nullptr;
     };
-    // Landing-point spacing along the grid's (dx, dy): central difference, one-sided at an edge of the
-    // lit region; false when neither neighbour lands on the same face.
+    // Landing-point spacing along the grid offset (dx, dy): central difference, one-sided at an edge of
+    // the lit region; false when neither neighbour lands on the same face.
     auto spacing = [&](int x, int y, int face, const Splat& c, int dx, int dy, float& len) {
         const Splat* p = at(x + dx, y + dy, face);
         const Splat* m = at(x - dx, y - dy, face);
@@ -30,6 +31,37 @@ void build_splats(const std::vector<FaceSplat>& landing, int grid, FootprintMode
         len = glm::length(d);
         return true;
     };
+    // The larger spacing of the lattice around texel (x, y) from whatever neighbours land; false if none
+    // within kNeighbourSearch texels does.
+    auto larger_spacing = [&](int x, int y, int face, const Splat& c, float& s) {
+        float sx = 0.0f, sy = 0.0f;
+        const bool hx = spacing(x, y, face, c, 1, 0, sx), hy = spacing(x, y, face, c, 0, 1, sy);
+        s = std::max(sx, sy);
+        if (hx && hy) return true;
+        // An axis without neighbours (the object's silhouette in the grid, or next to rays lost to TIR or
+        // a null value): the diagonals J (1, 1) and J (1, -1) bound the larger column of J from above
+        // (parallelogram law: |J(1,1)|^2 + |J(1,-1)|^2 = 2 (|J(1,0)|^2 + |J(0,1)|^2)), so the splat
+        // errs on the wide side instead of collapsing to the minimum where grazing rays spread the most.
+        float d = 0.0f;
+        bool found = hx || hy;
+        if (spacing(x, y, face, c, 1, 1, d)) s = std::max(s, d), found = true;
+        if (spacing(x, y, face, c, 1, -1, d)) s = std::max(s, d), found = true;
+        if (found) return true;
+        // No neighbour at all: the mean spacing to the landing points on the nearest ring of texels
+        // (Chebyshev distance k) that has any, the largest over that ring.
+        for (int k = 2; k <= kNeighbourSearch; ++k) {
+            for (int j = -k; j <= k; ++j)
+                for (int i = -k; i <= k; ++i) {
+                    if (std::max(std::abs(i), std::abs(j)) != k) continue;
+                    const Splat* n = at(x + i, y + j, face);
+                    if (!n) continue;
+                    s = std::max(s, glm::length(n->pixel - c.pixel) / std::sqrt(static_cast<float>(i * i + j * j)));
+                    found = true;
+                }
+            if (found) return true;
+        }
+        return false;
+    };
     for (int y = 0; y < g; ++y)
         for (int x = 0; x < g; ++x) {
             const FaceSplat& fs = landing[static_cast<std::size_t>(y) * g + x];
@@ -37,13 +69,13 @@ void build_splats(const std::vector<FaceSplat>& landing, int grid, FootprintMode
             Splat sp = fs.splat;
             sp.radius = radius;
             if (mode == FootprintMode::Adaptive) {
-                float sx = 0.0f, sy = 0.0f;
-                spacing(x, y, fs.face, sp, 1, 0, sx);
-                spacing(x, y, fs.face, sp, 0, 1, sy);
-                sp.radius = std::clamp(kAdaptiveScale * std::max(sx, sy), radius, kMaxAdaptiveRadius);
+                float s = 0.0f;
+                if (!larger_spacing(x, y, fs.face, sp, s)) ++isolated;   // kept at the minimum footprint
+                sp.radius = std::clamp(kAdaptiveScale * s, radius, kMaxAdaptiveRadius);
             }
             per_face[static_cast<std::size_t>(fs.face)].push_back(sp);
         }
+    return isolated;
 }
 
 }  // namespace caustics::caustic_mapping

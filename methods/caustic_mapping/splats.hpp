@@ -25,13 +25,19 @@ struct FaceSplat {
 //             spreads the splats grow and close the gaps (no ring pattern of isolated splats); where it
 //             focuses they shrink (no blur of the focus by a size fixed at the grid spacing). Not in the
 //             paper (its footprint is a fixed point size); splat=gaussian / point restore that.
+//             Where a texel's grid neighbours do not land (silhouette texels, texels next to rays lost to
+//             TIR or a null value: the grazing rays that spread the most) the spacing comes from the
+//             neighbours that do: the diagonals, else the nearest ring of landed texels within
+//             kNeighbourSearch; a splat with none keeps the minimum (its flux is kept, and counted).
 enum class FootprintMode { Fixed, Adaptive };
 constexpr float kAdaptiveScale = 1.75f;
 constexpr float kMaxAdaptiveRadius = 64.0f;
+constexpr int kNeighbourSearch = 4;
 
 // Appends the splats of the grid x grid landing points to per_face[face] (cleared first; one vector per
-// face, reused between frames so that no frame allocates once they have grown).
-void build_splats(const std::vector<FaceSplat>& landing, int grid, FootprintMode mode, float radius,
-                  std::vector<std::vector<Splat>>& per_face);
+// face, reused between frames so that no frame allocates once they have grown). Returns the number of
+// adaptive splats with no landed neighbour within kNeighbourSearch texels (kept at the minimum radius).
+int build_splats(const std::vector<FaceSplat>& landing, int grid, FootprintMode mode, float radius,
+                 std::vector<std::vector<Splat>>& per_face);
 
 }  // namespace caustics::caustic_mapping
