@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "ball_lens.hpp"
 #include "frame.hpp"
 #include "receiver_chart.hpp"
 #include "registry.hpp"
@@ -24,62 +25,17 @@ using namespace caustics;
 
 namespace {
 
-constexpr double kR = 0.5, kIor = 1.5, kCenterZ = 1.0, kDistance = 1.0;   // floor 1.0 below the centre
-constexpr double kFloor = 2.0;                                                 // floor edge [m]
+const test_support::BallLens kLens;   // R 0.5, n 1.5, floor 1.0 below the centre, 128 x 128 bins
 constexpr int kBins = 128;
 
-Scene ball_lens_scene() {
-    Scene s;
-    s.name = "ball_lens";
-    Light light;
-    light.direction = {0.0, 0.0, -1.0};
-    light.irradiance = 1.0;
-    s.lights.push_back(light);
-    Object ball;
-    ball.name = "ball";
-    ball.shape = ShapeType::Sphere;
-    ball.center = {0.0, 0.0, kCenterZ};
-    ball.radius = kR;
-    ball.material.type = MaterialType::Dielectric;
-    ball.material.ior = kIor;
-    Object floor;
-    floor.name = "floor";
-    floor.shape = ShapeType::Plane;
-    floor.material.type = MaterialType::Diffuse;
-    floor.center = {0.0, 0.0, kCenterZ - kDistance};
-    floor.u = {kFloor, 0.0, 0.0};
-    floor.v = {0.0, kFloor, 0.0};
-    s.objects = {ball, floor};
-    s.receiver = {"floor", 1, kBins, kBins};
-    return s;
-}
-
-// Signed landing radius of the meridional ray at height h (x = h, travelling -z); +inf if it never
-// reaches the floor.
-double landing_radius(double h) {
-    const double cos_i = std::sqrt(1.0 - (h / kR) * (h / kR));
-    double px = h, pz = cos_i * kR;   // entry point relative to the centre
-    double dx = 0.0, dz = -1.0;
-    auto refract = [](double& ux, double& uz, double nx, double nz, double eta) {   // n faces the ray
-        const double ci = -(ux * nx + uz * nz);
-        const double ct = std::sqrt(std::max(0.0, 1.0 - eta * eta * (1.0 - ci * ci)));
-        ux = eta * ux + (eta * ci - ct) * nx;
-        uz = eta * uz + (eta * ci - ct) * nz;
-    };
-    refract(dx, dz, px / kR, pz / kR, 1.0 / kIor);
-    const double t = -2.0 * (px * dx + pz * dz);   // second intersection with the circle
-    px += t * dx, pz += t * dz;
-    refract(dx, dz, -px / kR, -pz / kR, kIor);
-    if (dz >= 0.0) return std::numeric_limits<double>::infinity();
-    return px + dx * (-kDistance - pz) / dz;
-}
+double landing_radius(double h) { return kLens.landing_radius(h); }
 
 // Flux per annulus [k dr, (k+1) dr) of radius: the source disc cut into thin rings of height h, each
 // ring's flux 2 pi h dh E0 spread uniformly over the radii its two edges land between.
 std::vector<double> annulus_flux(double dr, int annuli) {
     std::vector<double> flux(static_cast<std::size_t>(annuli), 0.0);
     constexpr int kSegments = 2'000'000;
-    const double h_max = kR * (1.0 - 1e-9);
+    const double h_max = kLens.radius * (1.0 - 1e-9);
     double h0 = 0.0, r0 = std::abs(landing_radius(0.0));
     for (int k = 1; k <= kSegments; ++k) {
         const double h1 = h_max * k / kSegments, r1 = std::min(std::abs(landing_radius(h1)), 1e3);
@@ -118,7 +74,7 @@ Annuli pool(const Image& receiver, const ReceiverChart& chart, double dr, int an
 }  // namespace
 
 TEST(CausticMappingClosedForm, BallLensRadialProfile) {
-    const Scene scene = ball_lens_scene();
+    const Scene scene = kLens.scene();
     FrameGeometry frame = build_frame_geometry(scene, 0);
     ReceiverChart chart(frame, kBins, kBins);
     const MethodInfo& info = require_method("caustic_mapping");
@@ -128,12 +84,7 @@ TEST(CausticMappingClosedForm, BallLensRadialProfile) {
     constexpr double kAnnulus = 0.04;
     const int annuli = static_cast<int>(0.9 / kAnnulus);
     const std::vector<double> exact_flux = annulus_flux(kAnnulus, annuli);
-    std::vector<double> folds;
-    for (double h = 1e-5; h < kR * (1.0 - 1e-6); h += 1e-5) {
-        const double a = std::abs(landing_radius(h - 1e-5)), b = std::abs(landing_radius(h)),
-                     c = std::abs(landing_radius(h + 1e-5));
-        if ((b - a) * (c - b) < 0.0) folds.push_back(b);
-    }
+    const std::vector<double> folds = kLens.folds(1e-5, 1e3);
     std::vector<int> compared;
     for (int k = 1; k < annuli; ++k) {
         bool near_fold = false;

@@ -25,6 +25,7 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include "ball_lens.hpp"
 #include "camera.hpp"
 #include "frame.hpp"
 #include "hash.hpp"
@@ -232,52 +233,17 @@ TEST(ReferenceClosedForm, SineSurfaceMatchesExactSnellMapping) {
 // sphere exactly; E(r) = E0 h / (r |dr/dh|) summed over preimages, here integrated over each receiver
 // bin, then bins are pooled into annuli.
 TEST(ReferenceClosedForm, BallLensRadialProfile) {
-    constexpr double R = 0.5, n = 1.5, kCenterZ = 1.0, kDistance = 1.0;   // plane 1.0 below the centre
-    const double f0 = n * R / (2.0 * (n - 1.0));
-    ASSERT_GT(kDistance, f0);
-    Scene s;
-    s.name = "ball_lens";
-    s.source_text = "ball lens test";
-    s.lights.push_back(Light{LightType::Directional, {0, 0, -1}, 1.0, {}, 1.0});
-    Object ball;
-    ball.name = "ball";
-    ball.shape = ShapeType::Sphere;
-    ball.center = {0, 0, kCenterZ};
-    ball.radius = R;
-    ball.material.type = MaterialType::Dielectric;
-    ball.material.ior = n;
-    Object plane;
-    plane.name = "floor";
-    plane.shape = ShapeType::Plane;
-    plane.center = {0, 0, kCenterZ - kDistance};
-    plane.u = {2, 0, 0};
-    plane.v = {0, 2, 0};
-    s.objects = {ball, plane};
-    s.receiver = {"floor", 1, 128, 128};
+    const test_support::BallLens lens;   // R 0.5, n 1.5, floor 1.0 below the centre
+    const double R = lens.radius;
+    ASSERT_GT(lens.distance, lens.paraxial_focus());
+    Scene s = lens.scene();
     TracedScene setup(std::move(s));
     const ReferenceResult ref = setup.run(4'000'000);
 
-    // Exact meridional trace: ray x = h travelling -z; returns the signed landing radius.
-    auto landing_r = [&](double h) {
-        const double sin_i = h / R, cos_i = std::sqrt(1.0 - sin_i * sin_i);
-        glm::dvec2 p(h, cos_i * R);                       // entry point (x, z relative to centre)
-        glm::dvec2 d(0.0, -1.0);
-        auto refract = [](glm::dvec2 dir, glm::dvec2 nrm, double eta) {   // nrm faces the incoming ray
-            const double ci = -glm::dot(dir, nrm);
-            const double ct = std::sqrt(1.0 - eta * eta * (1.0 - ci * ci));
-            return eta * dir + (eta * ci - ct) * nrm;
-        };
-        d = refract(d, p / R, 1.0 / n);
-        const double tx = -2.0 * glm::dot(p, d);          // second intersection with the circle
-        p += tx * d;
-        d = refract(d, -p / R, n);
-        if (d.y >= 0.0) return std::numeric_limits<double>::infinity();   // never reaches the plane
-        return p.x + d.x * (-kDistance - p.y) / d.y;
-    };
     // Radial flux density: 2 pi h dh of source area per unit h, mapped to |r|.
     constexpr int kFine = 40000;
     const double r_max = 1.5;
-    auto abs_map = [&](double h) { return std::min(std::abs(landing_r(h)), 1e3); };
+    auto abs_map = [&](double h) { return std::min(std::abs(lens.landing_radius(h)), 1e3); };
     std::vector<double> ring_flux = bin_average_1d(abs_map, [](double h) { return 2.0 * std::numbers::pi * h; }, 0.0,
                                                    R * (1.0 - 1e-9), 4'000'000, 0.0, r_max, kFine);
     std::vector<double> e_fine(kFine);
@@ -290,12 +256,8 @@ TEST(ReferenceClosedForm, BallLensRadialProfile) {
         const int i = static_cast<int>(r / dr);
         return i < kFine ? e_fine[static_cast<std::size_t>(i)] : 0.0;
     };
-    // Where |r(h)| folds (dr/dh = 0), E has an integrable singularity: the caustic. Find it.
-    std::vector<double> folds;
-    for (double h = 1e-4; h < R - 2e-4; h += 1e-4) {
-        const double a = abs_map(h - 1e-4), b = abs_map(h), c = abs_map(h + 1e-4);
-        if ((b - a) * (c - b) < 0.0 && b < r_max) folds.push_back(b);
-    }
+    // Where |r(h)| folds (dr/dh = 0), E has an integrable singularity: the caustic.
+    const std::vector<double> folds = lens.folds(1e-4, r_max);
 
     // Expected bin values: 16 x 16 sub-samples of the fine radial profile.
     const ReceiverChart& chart = *setup.chart;
