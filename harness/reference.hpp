@@ -65,7 +65,9 @@ ReferenceResult compute_reference(const RayTracer& tracer, const ReceiverChart& 
 std::string reference_cache_key(const Scene& scene, int frame, const ReferenceSettings& settings);
 
 // Loads the cached reference for (scene, frame, settings) from cache_dir, or computes and stores it
-// (atomically: temporary name, then rename). A truncated, corrupt or stale entry is rebuilt.
+// (atomically: temporary name, then rename). A truncated, corrupt or stale entry is rebuilt. A scene
+// built in code (no source_text) is computed every time: its key could not tell it from another one.
+// A loaded scene changed in code keeps its file's key: compute such a scene with compute_reference.
 ReferenceResult load_or_compute_reference(const FrameGeometry& frame, const RayTracer& tracer,
                                           const ReceiverChart& chart, const CameraGBuffer* camera,
                                           const ReferenceSettings& settings,

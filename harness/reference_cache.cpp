@@ -206,6 +206,9 @@ ReferenceResult load_or_compute_reference(const FrameGeometry& frame, const RayT
                                           const ReceiverChart& chart, const CameraGBuffer* camera,
                                           const ReferenceSettings& settings, const std::string& cache_dir) {
     namespace fs = std::filesystem;
+    // The key hashes the scene file's bytes; a scene built in code has none, so two different ones
+    // would share a key. Those are computed every time and never cached.
+    if (frame.scene->source_text.empty()) return compute_reference(tracer, chart, camera, settings);
     ReferenceSettings keyed = settings;
     keyed.camera_view = settings.camera_view && camera != nullptr;
     const std::string key = reference_cache_key(*frame.scene, frame.frame, keyed);

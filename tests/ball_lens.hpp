@@ -28,7 +28,6 @@ struct BallLens {
     Scene scene() const {
         Scene s;
         s.name = "ball_lens";
-        s.source_text = "ball lens test";
         Light light;
         light.type = LightType::Directional;
         light.direction = {0.0, 0.0, -1.0};

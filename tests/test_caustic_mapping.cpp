@@ -12,6 +12,7 @@
 #include "../methods/caustic_mapping/estimator.hpp"
 #include "../methods/caustic_mapping/positions_texture.hpp"
 #include "camera.hpp"
+#include "ball_lens.hpp"
 #include "frame.hpp"
 #include "gbuffer_raster.hpp"
 #include "metrics.hpp"
@@ -19,6 +20,7 @@
 #include "receiver_chart.hpp"
 #include "reference.hpp"
 #include "registry.hpp"
+#include "water_scene.hpp"
 
 using namespace caustics;
 using namespace caustics::caustic_mapping;
@@ -83,53 +85,30 @@ CausticOutput render(const Scene& scene, const std::map<std::string, std::string
     return method->render(frame, request);
 }
 
-Object floor_plane(double z, double size) {
-    Object floor;
-    floor.name = "floor";
-    floor.shape = ShapeType::Plane;
-    floor.material.type = MaterialType::Diffuse;
-    floor.center = {0.0, 0.0, z};
-    floor.u = {size, 0.0, 0.0};
-    floor.v = {0.0, size, 0.0};
-    return floor;
-}
-
 Scene water_scene(glm::dvec3 light_dir, bool fresnel, HeightGenerator gen = HeightGenerator::Flat) {
-    Scene s;
-    s.name = "water";
-    Light light;
-    light.direction = glm::normalize(light_dir);
-    light.irradiance = 2.0;
-    s.lights.push_back(light);
-    Object water;
-    water.name = "water";
-    water.shape = ShapeType::HeightField;
-    water.material.type = MaterialType::Dielectric;
-    water.material.ior = 1.33;
-    water.heightfield.size = {2.0, 2.0};
-    water.heightfield.resolution = {256, 256};
-    water.heightfield.generator = gen;
-    water.heightfield.amplitude = 0.01;
-    water.heightfield.wavelength = 0.25;
-    s.objects = {water, floor_plane(-0.4, 1.0)};
-    s.receiver = {"floor", 1, 64, 64};
+    WaterOverFloor d;
+    d.name = "water";
+    d.light_direction = light_dir;
+    d.irradiance = 2.0;
+    d.water_resolution = 256;
+    d.generator = gen;
+    d.amplitude = 0.01;
+    Scene s = make_water_scene(d);
     s.fresnel = fresnel;
     return s;
 }
 
+// A glass ball over a 4 m floor at z = 0 (128 x 128 bins), lit by `light`.
 Scene sphere_scene(Light light, double ior, double center_z, double radius = 0.5) {
-    Scene s;
+    test_support::BallLens lens;
+    lens.radius = radius;
+    lens.ior = ior;
+    lens.center_z = center_z;
+    lens.distance = center_z;
+    lens.floor_side = 4.0;
+    Scene s = lens.scene();
     s.name = "ball";
-    s.lights.push_back(light);
-    Object ball;
-    ball.name = "ball";
-    ball.shape = ShapeType::Sphere;
-    ball.center = {0.0, 0.0, center_z};
-    ball.radius = radius;
-    ball.material.type = MaterialType::Dielectric;
-    ball.material.ior = ior;
-    s.objects = {ball, floor_plane(0.0, 4.0)};
-    s.receiver = {"floor", 1, 128, 128};
+    s.lights = {light};
     return s;
 }
 
