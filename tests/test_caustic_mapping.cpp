@@ -15,6 +15,7 @@
 #include "ball_lens.hpp"
 #include "frame.hpp"
 #include "gbuffer_raster.hpp"
+#include "method_support.hpp"
 #include "metrics.hpp"
 #include "ray_tracer.hpp"
 #include "receiver_chart.hpp"
@@ -72,17 +73,7 @@ const MethodInfo& info() { return require_method("caustic_mapping"); }
 
 CausticOutput render(const Scene& scene, const std::map<std::string, std::string>& overrides, int width, int height,
                      const CameraGBuffer* camera = nullptr) {
-    const MethodInfo& m = info();
-    std::unique_ptr<Method> method = m.create(ParamSet::resolve(m.name, m.params, overrides));
-    EXPECT_TRUE(method->capabilities(scene).supported) << method->capabilities(scene).reason;
-    FrameGeometry frame = build_frame_geometry(scene, 0);
-    ReceiverChart chart(frame, width, height);
-    method->prepare(scene);
-    method->update(frame);
-    RenderRequest request;
-    request.receiver = &chart;
-    request.camera = camera;
-    return method->render(frame, request);
+    return test_support::render_method("caustic_mapping", scene, overrides, width, height, camera);
 }
 
 Scene water_scene(glm::dvec3 light_dir, bool fresnel, HeightGenerator gen = HeightGenerator::Flat) {

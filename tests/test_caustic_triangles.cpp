@@ -9,6 +9,7 @@
 #include <string>
 
 #include "frame.hpp"
+#include "method_support.hpp"
 #include "metrics.hpp"
 #include "ray_tracer.hpp"
 #include "receiver_chart.hpp"
@@ -24,16 +25,7 @@ const MethodInfo& info() { return require_method("caustic_triangles"); }
 
 CausticOutput render(const Scene& scene, const std::map<std::string, std::string>& overrides, int width,
                      int height) {
-    const MethodInfo& m = info();
-    std::unique_ptr<Method> method = m.create(ParamSet::resolve(m.name, m.params, overrides));
-    EXPECT_TRUE(method->capabilities(scene).supported) << method->capabilities(scene).reason;
-    FrameGeometry frame = build_frame_geometry(scene, 0);
-    ReceiverChart chart(frame, width, height);
-    method->prepare(scene);
-    method->update(frame);
-    RenderRequest request;
-    request.receiver = &chart;
-    return method->render(frame, request);
+    return test_support::render_method("caustic_triangles", scene, overrides, width, height);
 }
 
 // Flat water 2 m x 2 m at z = 0 over a 1 m x 1 m floor 0.4 m below (plane or flat height field).

@@ -317,8 +317,6 @@ using test_support::sine_desc;
 
 // Renders receiver map and a small camera view; asserts finite output.
 void render_ok(const Scene& scene, std::map<std::string, std::string> params, const std::string& what) {
-    const MethodInfo& info = require_method("eikonal_fmm");
-    ASSERT_TRUE(info.create(ParamSet::resolve(info.name, info.params, params))->capabilities(scene).supported) << what;
     const CausticOutput out = test_support::render_volume_method("eikonal_fmm", scene, params, 16);
     ASSERT_EQ(out.receiver.width, scene.receiver.width) << what;
     double sum = 0.0;

@@ -8,11 +8,7 @@
 #include <glm/glm.hpp>
 
 #include "camera.hpp"
-#include "frame.hpp"
-#include "method.hpp"
-#include "params.hpp"
-#include "receiver_chart.hpp"
-#include "registry.hpp"
+#include "method_support.hpp"
 #include "scene.hpp"
 #include "water_scene.hpp"
 
@@ -54,19 +50,11 @@ inline CameraGBuffer floor_pixels(const Scene& scene, int width, float x0, float
     return gb;
 }
 
-// prepare, update and render `method` with `params` on frame 0: the receiver map and `camera_pixels`
-// floor pixels from x = -0.6 over 0.96 m.
+// render_method with the scene's receiver map and `camera_pixels` floor pixels from x = -0.6 over 0.96 m.
 inline CausticOutput render_volume_method(const std::string& method_name, const Scene& scene,
                                           const std::map<std::string, std::string>& params, int camera_pixels) {
-    const MethodInfo& info = require_method(method_name);
-    auto method = info.create(ParamSet::resolve(info.name, info.params, params));
-    const FrameGeometry frame = build_frame_geometry(scene, 0);
-    method->prepare(scene);
-    method->update(frame);
-    const ReceiverChart chart(frame, scene.receiver.width, scene.receiver.height);
     const CameraGBuffer gb = floor_pixels(scene, camera_pixels, -0.6f, 0.96f / static_cast<float>(camera_pixels));
-    const RenderRequest request{&chart, &gb};
-    return method->render(frame, request);
+    return render_method(method_name, scene, params, scene.receiver.width, scene.receiver.height, &gb);
 }
 
 }  // namespace caustics::test_support
