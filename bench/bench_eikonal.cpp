@@ -29,9 +29,8 @@ using bench::PoolCube;
 using bench::maxrss_mb;
 PoolCube& pool() { return bench::pool_cube(); }
 
-std::unique_ptr<Method> make(const std::string& method, std::map<std::string, std::string> params) {
-    const MethodInfo& info = require_method(method);
-    return info.create(ParamSet::resolve(info.name, info.params, params));
+std::unique_ptr<Method> make(const std::string& method, const std::map<std::string, std::string>& params) {
+    return bench::make_method(method, params);
 }
 
 // update(): the first texture a method object builds (its grids are allocated and first touched inside
@@ -62,15 +61,7 @@ void update_steady(benchmark::State& state, const std::string& method, std::map<
 }
 
 void lookup(benchmark::State& state, const std::string& method, std::map<std::string, std::string> params) {
-    PoolCube& p = pool();
-    params["grid"] = std::to_string(state.range(0));
-    auto m = make(method, params);
-    m->update(*p.frame);
-    RenderRequest request{p.chart.get(), p.gbuffer.get()};
-    for (auto _ : state) benchmark::DoNotOptimize(m->render(*p.frame, request));
-    std::size_t covered = 0;
-    for (auto c : p.gbuffer->covered) covered += c;
-    state.counters["lookups"] = static_cast<double>(p.chart->width() * p.chart->height() + covered);
+    bench::lookup_benchmark(state, method, std::move(params));
 }
 
 }  // namespace

@@ -30,9 +30,8 @@ using bench::PoolCube;
 using bench::maxrss_mb;
 PoolCube& pool() { return bench::pool_cube(); }
 
-std::unique_ptr<Method> make(std::map<std::string, std::string> params) {
-    const MethodInfo& info = require_method("wave_pde");
-    return info.create(ParamSet::resolve(info.name, info.params, params));
+std::unique_ptr<Method> make(const std::map<std::string, std::string>& params) {
+    return bench::make_method("wave_pde", params);
 }
 
 void Update(benchmark::State& state, std::map<std::string, std::string> params) {
@@ -54,15 +53,7 @@ void Update(benchmark::State& state, std::map<std::string, std::string> params) 
 }
 
 void Lookup(benchmark::State& state, std::map<std::string, std::string> params) {
-    PoolCube& p = pool();
-    params["grid"] = std::to_string(state.range(0));
-    auto m = make(params);
-    m->update(*p.frame);
-    RenderRequest request{p.chart.get(), p.gbuffer.get()};
-    for (auto _ : state) benchmark::DoNotOptimize(m->render(*p.frame, request));
-    std::size_t covered = 0;
-    for (auto c : p.gbuffer->covered) covered += c;
-    state.counters["lookups"] = static_cast<double>(p.chart->width() * p.chart->height() + covered);
+    bench::lookup_benchmark(state, "wave_pde", std::move(params));
 }
 
 }  // namespace
