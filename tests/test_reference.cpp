@@ -1,6 +1,6 @@
 // Reference light tracer tests (issue 2, "Tests"): closed forms (refracting sine surface, ball lens)
-// within the reference's own standard error, flux conservation, Embree watertightness, determinism
-// across thread counts, and the cache (key sensitivity, damaged entries rebuilt).
+// within the reference's own standard error, flux conservation, Embree watertightness and determinism
+// across thread counts (the cache: test_reference_cache.cpp).
 //
 // Tolerances: every Monte Carlo comparison is a z-test against the reference's per-bin standard error,
 // Sidak-corrected over the number of bins compared so that the whole test has a false-alarm rate of
@@ -26,6 +26,7 @@
 #include <tbb/global_control.h>
 
 #include "ball_lens.hpp"
+#include "reference_support.hpp"
 #include "camera.hpp"
 #include "frame.hpp"
 #include "hash.hpp"
@@ -36,12 +37,12 @@
 
 namespace fs = std::filesystem;
 using namespace caustics;
+using namespace caustics::test_support;
 
 namespace {
 
 constexpr double kFamilyAlpha = 1e-3;
 
-std::string scene_path(const std::string& name) { return std::string(CAUSTICS_SOURCE_DIR) + "/scenes/" + name; }
 
 // Two-sided z threshold for `tests` simultaneous comparisons (Sidak): per-test alpha
 // 1 - (1 - kFamilyAlpha)^(1/tests), inverted by bisection on erfc.
@@ -53,46 +54,6 @@ double sidak_z(int tests) {
         (std::erfc(mid / std::sqrt(2.0)) > alpha ? lo : hi) = mid;
     }
     return 0.5 * (lo + hi);
-}
-
-// A scene with its frame, tracer and chart, kept at fixed addresses (each refers to the previous).
-struct TracedScene {
-    Scene scene;
-    std::unique_ptr<FrameGeometry> frame;
-    std::unique_ptr<RayTracer> tracer;
-    std::unique_ptr<ReceiverChart> chart;
-
-    explicit TracedScene(Scene s, int frame_index = 0) : scene(std::move(s)) {
-        frame = std::make_unique<FrameGeometry>(build_frame_geometry(scene, frame_index));
-        tracer = std::make_unique<RayTracer>(*frame);
-        chart = std::make_unique<ReceiverChart>(*frame, scene.receiver.width, scene.receiver.height);
-    }
-    ReferenceResult run(std::uint64_t photons, int threads = 0, const CameraGBuffer* camera = nullptr) const {
-        ReferenceSettings settings;
-        settings.photons = photons;
-        settings.threads = threads;
-        settings.camera_view = camera != nullptr;
-        settings.progress = false;
-        return compute_reference(*tracer, *chart, camera, settings);
-    }
-};
-
-int find_object(const Scene& s, const std::string& name) {
-    for (std::size_t i = 0; i < s.objects.size(); ++i)
-        if (s.objects[i].name == name) return static_cast<int>(i);
-    return -1;
-}
-
-// The sine scene with a smaller water patch (1.2 m instead of 2 m, same cell size): photons that can
-// reach the 1 m floor all start within it, so fewer are wasted. Coarser receiver for speed.
-Scene sine_test_scene(int bins_x, int bins_y) {
-    Scene s = load_scene(scene_path("sine.json"));
-    Object& water = s.objects.at(static_cast<std::size_t>(find_object(s, "water")));
-    water.heightfield.size = {1.2, 1.2};
-    water.heightfield.resolution = {600, 600};
-    s.receiver.width = bins_x;
-    s.receiver.height = bins_y;
-    return s;
 }
 
 // Exact refraction of the downward ray at x0 through z = A sin(k x0) (no small-slope approximation),
@@ -510,87 +471,4 @@ TEST(ReferenceDeterminism, OneAndTwoThreadsGiveIdenticalBits) {
     other.progress = false;
     const ReferenceResult c = compute_reference(*setup.tracer, *setup.chart, nullptr, other);
     EXPECT_FALSE(same(a.receiver, c.receiver));
-}
-
-TEST(ReferenceCache, KeyChangesWithEveryInput) {
-    const fs::path dir = fs::temp_directory_path() / ("caustics_refkey_" + std::to_string(::getpid()));
-    fs::create_directories(dir);
-    const fs::path asset = dir / "asset.bin";
-    std::ofstream(asset, std::ios::binary) << "abcdef";
-    Scene s = load_scene(scene_path("sine.json"));
-    s.assets.push_back(asset.string());
-    ReferenceSettings settings;
-    settings.photons = 1000;
-    const std::string base = reference_cache_key(s, 0, settings);
-    EXPECT_EQ(base.size(), 32u);
-    EXPECT_EQ(base, reference_cache_key(s, 0, settings));
-
-    Scene text = s;
-    text.source_text[text.source_text.size() / 2] ^= 1;
-    EXPECT_NE(base, reference_cache_key(text, 0, settings));
-    EXPECT_NE(base, reference_cache_key(s, 1, settings));
-    ReferenceSettings more = settings;
-    more.photons += 1;
-    EXPECT_NE(base, reference_cache_key(s, 0, more));
-    ReferenceSettings seed = settings;
-    seed.seed += 1;
-    EXPECT_NE(base, reference_cache_key(s, 0, seed));
-    ReferenceSettings nocam = settings;
-    nocam.camera_view = !nocam.camera_view;
-    EXPECT_NE(base, reference_cache_key(s, 0, nocam));
-    std::ofstream(asset, std::ios::binary) << "abcdeg";   // one asset byte
-    EXPECT_NE(base, reference_cache_key(s, 0, settings));
-    std::ofstream(asset, std::ios::binary) << "abcdef";
-    EXPECT_EQ(base, reference_cache_key(s, 0, settings));
-    fs::remove_all(dir);
-}
-
-TEST(ReferenceCache, DamagedEntriesAreRebuilt) {
-    const fs::path dir = fs::temp_directory_path() / ("caustics_refcache_" + std::to_string(::getpid()));
-    fs::remove_all(dir);
-    TracedScene setup(sine_test_scene(16, 16));
-    ReferenceSettings settings;
-    settings.photons = 100'000;
-    settings.camera_view = false;
-    settings.progress = false;
-    auto load = [&] { return load_or_compute_reference(*setup.frame, *setup.tracer, *setup.chart, nullptr, settings, dir.string()); };
-    auto same = [](const ReferenceResult& a, const ReferenceResult& b) {
-        return a.receiver.pixels == b.receiver.pixels && a.receiver_stderr.pixels == b.receiver_stderr.pixels &&
-               std::memcmp(&a.ledger, &b.ledger, sizeof(FluxLedger)) == 0 && a.noise_nrmse == b.noise_nrmse &&
-               a.cache_key == b.cache_key;
-    };
-    const ReferenceResult fresh = load();
-    EXPECT_FALSE(fresh.from_cache);
-    const fs::path file = dir / (fresh.cache_key + ".ref");
-    ASSERT_TRUE(fs::exists(file));
-    const ReferenceResult cached = load();
-    EXPECT_TRUE(cached.from_cache);
-    EXPECT_TRUE(same(fresh, cached));
-
-    const auto size = fs::file_size(file);
-    fs::resize_file(file, size / 2);   // truncated
-    const ReferenceResult rebuilt = load();
-    EXPECT_FALSE(rebuilt.from_cache);
-    EXPECT_TRUE(same(fresh, rebuilt));
-    EXPECT_EQ(fs::file_size(file), size);
-
-    {   // one flipped bit in the payload
-        std::fstream f(file, std::ios::in | std::ios::out | std::ios::binary);
-        f.seekg(static_cast<std::streamoff>(size / 2));
-        char c;
-        f.read(&c, 1);
-        c ^= 0x10;
-        f.seekp(static_cast<std::streamoff>(size / 2));
-        f.write(&c, 1);
-    }
-    const ReferenceResult rebuilt2 = load();
-    EXPECT_FALSE(rebuilt2.from_cache);
-    EXPECT_TRUE(same(fresh, rebuilt2));
-    EXPECT_TRUE(load().from_cache);
-
-    std::ofstream(file, std::ios::binary | std::ios::trunc) << "garbage";
-    EXPECT_FALSE(load().from_cache);
-    for (const auto& entry : fs::directory_iterator(dir))   // no temporary files left behind
-        EXPECT_EQ(entry.path().extension(), ".ref") << entry.path();
-    fs::remove_all(dir);
 }
