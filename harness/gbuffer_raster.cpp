@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <limits>
 #include <stdexcept>
 
@@ -50,6 +51,17 @@ inline std::int64_t edge(std::int64_t ax, std::int64_t ay, std::int64_t bx, std:
 // one of them owns the centres lying on it.
 inline bool top_left(std::int64_t dx, std::int64_t dy) { return dy < 0 || (dy == 0 && dx > 0); }
 
+// Every target has the projection's size; normals are absent or one per position.
+void check_inputs(const LightProjection& view, const GBufferTriangles& batch,
+                  std::initializer_list<const GBuffer*> targets) {
+    for (const GBuffer* t : targets)
+        if (t->width != view.width || t->height != view.height ||
+            t->depth.size() != static_cast<std::size_t>(view.width) * view.height)
+            throw std::invalid_argument("GBufferRaster: target size differs from the projection's");
+    if (!batch.normals.empty() && batch.normals.size() != batch.positions.size())
+        throw std::invalid_argument("GBufferRaster: normals must be empty or one per position");
+}
+
 }  // namespace
 
 void GBuffer::clear(int w, int h, DepthTest test, bool with_normals) {
@@ -85,11 +97,7 @@ GBufferRaster& GBufferRaster::operator=(GBufferRaster&&) noexcept = default;
 
 GBufferStats GBufferRaster::draw(const LightProjection& view, const GBufferTriangles& batch, CullMode cull,
                                  DepthTest test, GBuffer& target) {
-    if (target.width != view.width || target.height != view.height ||
-        target.depth.size() != static_cast<std::size_t>(view.width) * view.height)
-        throw std::invalid_argument("GBufferRaster: target size differs from the projection's");
-    if (!batch.normals.empty() && batch.normals.size() != batch.positions.size())
-        throw std::invalid_argument("GBufferRaster: normals must be empty or one per position");
+    check_inputs(view, batch, {&target});
     GBufferStats pre;
     GBufferTriangles eff = batch;
     if (view.type == ProjectionType::Perspective) clip_near(view, batch, eff, pre);
@@ -98,12 +106,7 @@ GBufferStats GBufferRaster::draw(const LightProjection& view, const GBufferTrian
 
 GBufferStats GBufferRaster::draw_front_back(const LightProjection& view, const GBufferTriangles& batch, DepthTest test,
                                             GBuffer& front, GBuffer& back) {
-    for (const GBuffer* t : {&front, &back})
-        if (t->width != view.width || t->height != view.height ||
-            t->depth.size() != static_cast<std::size_t>(view.width) * view.height)
-            throw std::invalid_argument("GBufferRaster: target size differs from the projection's");
-    if (!batch.normals.empty() && batch.normals.size() != batch.positions.size())
-        throw std::invalid_argument("GBufferRaster: normals must be empty or one per position");
+    check_inputs(view, batch, {&front, &back});
     GBufferStats pre;
     GBufferTriangles eff = batch;
     if (view.type == ProjectionType::Perspective) clip_near(view, batch, eff, pre);
