@@ -6,11 +6,36 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.colors import LogNorm, Normalize  # noqa: E402
 
 from load import ok_runs, read_image  # noqa: E402
 from pareto import pareto_front  # noqa: E402
 
 MARKERS = "osD^v<>ph*"
+
+
+# A caustic whose peak exceeds this many times the reference's 99.5th percentile is shown on a log scale:
+# a linear scale clipped at the percentile saturates the focus (the sphere's spot).
+CONCENTRATED_PEAK_RATIO = 4.0
+LOG_DECADES = 3.0
+
+
+def irradiance_cmap():
+    """inferno, with zero (masked by a log scale) drawn as the scale's darkest colour."""
+    cmap = plt.get_cmap("inferno").copy()
+    cmap.set_bad(cmap(0.0))
+    return cmap
+
+
+def irradiance_norm(reference):
+    """Colour scale of the receiver maps and its label: linear up to the 99.5th percentile, or, for a
+    concentrated caustic, logarithmic over LOG_DECADES decades below the peak so the focus is not clipped."""
+    finite = reference[np.isfinite(reference)]
+    peak = float(finite.max()) if finite.size else 0.0
+    scale = float(np.percentile(finite, 99.5)) if finite.size else 0.0
+    if peak > 0.0 and peak > CONCENTRATED_PEAK_RATIO * scale:
+        return LogNorm(vmin=peak * 10.0 ** -LOG_DECADES, vmax=peak, clip=True), "E_c [W/m^2], log scale"
+    return Normalize(vmin=0.0, vmax=scale or 1.0, clip=True), "E_c [W/m^2]"
 
 
 def _save(fig, directory, name):
@@ -137,7 +162,7 @@ def image_grid(frame, scene, directory, sweep_dir, chosen):
     maps = [(p, m) for p, m in maps if m is not None and m.shape == reference.shape]
     if not maps:
         return None
-    scale = float(np.percentile(reference, 99.5)) or 1.0
+    norm, irradiance_label = irradiance_norm(reference)
     diffs = []
     for p, m in maps:
         fit = 1.0 if p["radiometric"] else float(p.get("fit_scale", 1.0))
@@ -147,11 +172,11 @@ def image_grid(frame, scene, directory, sweep_dir, chosen):
     beauty = [os.path.join(sweep_dir, "runs", p["run_id"], "beauty.png") for p, _ in maps]
     rows = 3 if any(os.path.exists(b) for b in beauty) else 2
     fig, axes = plt.subplots(rows, n + 1, figsize=(2.6 * (n + 1) + 0.8, 2.8 * rows), squeeze=False)
-    im = axes[0][0].imshow(reference, cmap="inferno", vmin=0, vmax=scale, origin="lower")
+    im = axes[0][0].imshow(reference, cmap=irradiance_cmap(), norm=norm, origin="lower")
     axes[0][0].set_title("reference", fontsize=9)
     for i, (p, m) in enumerate(maps, start=1):
         fit = 1.0 if p["radiometric"] else float(p.get("fit_scale", 1.0))
-        axes[0][i].imshow(m * fit, cmap="inferno", vmin=0, vmax=scale, origin="lower")
+        axes[0][i].imshow(m * fit, cmap=irradiance_cmap(), norm=norm, origin="lower")
         title = p["label"] + f"\ngrid {int(p['grid'])}, {p['time_ms_median']:.2f} ms"
         axes[0][i].set_title(title, fontsize=8)
         dm = axes[1][i].imshow(diffs[i - 1], cmap="RdBu_r", vmin=-limit, vmax=limit, origin="lower")
@@ -170,7 +195,7 @@ def image_grid(frame, scene, directory, sweep_dir, chosen):
             a.set_yticks([])
             if not a.images:
                 a.axis("off")
-    fig.colorbar(im, ax=list(axes[0]), shrink=0.8, label="E_c [W/m^2]")
+    fig.colorbar(im, ax=list(axes[0]), shrink=0.8, label=irradiance_label)
     fig.colorbar(dm, ax=list(axes[1]), shrink=0.8, label="signed difference [W/m^2]")
     fig.suptitle(f"{scene}, frame {frame_no}: receiver maps", fontsize=10)
     return _save(fig, directory, f"images_{scene}")

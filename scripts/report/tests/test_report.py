@@ -26,6 +26,22 @@ def write_exr(path, pixels):
     out.close()
 
 
+class ColourScaleTest(unittest.TestCase):
+    def test_concentrated_caustic_gets_a_log_scale(self):
+        from figures import irradiance_norm
+
+        smooth = 1.0 + 0.5 * np.sin(np.linspace(0.0, 20.0, 64 * 64)).reshape(64, 64)
+        norm, label = irradiance_norm(smooth)
+        self.assertNotIn("log", label)
+        self.assertAlmostEqual(norm.vmax, float(np.percentile(smooth, 99.5)))
+        spot = np.full((64, 64), 1.0)
+        spot[30:32, 30:32] = 300.0  # 4 of 4096 pixels: above the 99.5th percentile
+        norm, label = irradiance_norm(spot)
+        self.assertIn("log", label)
+        self.assertEqual(norm.vmax, 300.0)
+        self.assertAlmostEqual(norm.vmin, 0.3)
+
+
 class ParetoTest(unittest.TestCase):
     def test_hand_made_front(self):
         points = [(1.0, 0.5), (2.0, 0.3), (2.5, 0.4), (3.0, 0.1), (0.5, 0.9), (3.0, 0.2), (4.0, 0.1), (2.0, 0.3)]
