@@ -16,7 +16,6 @@
 //   boundary    none | embed (a larger domain) | paper (modified propagation costs, Algorithm 2)
 //   ...
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 
 #include <tbb/parallel_for.h>
@@ -24,14 +23,12 @@
 #include "eikonal_solver.hpp"
 #include "errors.hpp"
 #include "registry.hpp"
+#include "timing.hpp"
 #include "volume_grid.hpp"
+#include "volume_texture_method.hpp"
 
 namespace caustics {
 namespace {
-
-double ms_since(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
 
 // Sec. 3.3: below the threshold height the fronts are assumed to have converged and the light to
 // dissipate; each layer is the layer above after `steps` explicit xy diffusion steps (5-point,
@@ -67,17 +64,15 @@ void dissipate_below(VolumeF& tex, int threshold_layer, int steps, std::int64_t&
     }
 }
 
-class EikonalFmm final : public Method {
+class EikonalFmm final : public VolumeTextureMethod {
 public:
     explicit EikonalFmm(const ParamSet& p)
-        : grid_(static_cast<int>(p.get_int("grid"))),
+        : VolumeTextureMethod(p),
+          grid_(static_cast<int>(p.get_int("grid"))),
           dissipation_steps_(static_cast<int>(p.get_int("iterations"))),
           threshold_height_(p.get_float("threshold_height")),
           embed_margin_(p.get_float("embed_margin")),
-          a_(p.get_float("a")),
-          b_(p.get_float("b")),
           scaled_ior_(p.get_enum("ior_model") == "scaled"),
-          normalize_flux_(p.get_enum("normalize") == "flux"),
           embed_(p.get_enum("boundary") == "embed") {
         options_.solver = p.get_enum("solver") == "sweep" ? eikonal::Solver::Sweep : eikonal::Solver::Fmm;
         options_.order = static_cast<int>(p.get_int("order"));
@@ -85,14 +80,9 @@ public:
         options_.boundary = p.get_enum("boundary") == "paper" ? eikonal::Boundary::Paper : eikonal::Boundary::None;
     }
 
-    Capability capabilities(const Scene& scene) const override {
-        const std::string why = volume_caustics_unsupported(scene);
-        return why.empty() ? Capability::yes() : Capability::no(why);
-    }
-
     void update(const FrameGeometry& frame) override {
         health_ = Health{};
-        stages_.clear();
+        update_stages_.clear();
         const ObjectInstance* water = find_water_interface(frame);
         if (!water) throw InputError(frame.scene->path, "objects", "eikonal_fmm needs a height-field dielectric interface");
         ior_ = water->object->material.ior;
@@ -100,20 +90,19 @@ public:
         const VolumeShape shape = caustic_volume(frame, *water, grid_, embed_ ? embed_margin_ : 0.0);
         eikonal::Stats stats;
         const VolumeD& phi = eikonal::solve(hf, shape, options_, stats, workspace_);
-        stages_.emplace_back("init", stats.init_ms);
-        stages_.emplace_back("boundary", stats.boundary_ms);
-        stages_.emplace_back("solve", stats.solve_ms);
+        update_stages_.emplace_back("init", stats.init_ms);
+        update_stages_.emplace_back("boundary", stats.boundary_ms);
+        update_stages_.emplace_back("solve", stats.solve_ms);
 
-        auto t0 = std::chrono::steady_clock::now();
+        Stopwatch watch;
         laplacian(phi, texture_);  // Eq. 3-4: curvature of the eikonal solution
-        const bool linear = b_ == 1.0;
         std::vector<std::int64_t> layer_nonfinite(static_cast<std::size_t>(shape.nz));
         tbb::parallel_for(0, shape.nz, [&](int k) {
             const std::size_t begin = shape.index(0, 0, k), end = begin + static_cast<std::size_t>(shape.nx) * shape.ny;
             for (std::size_t c = begin; c < end; ++c) {
                 // Converging fronts (caustics) have negative curvature; air cells carry no light.
                 const double conv = phi.data[c] > 0.0 ? std::max(0.0, -static_cast<double>(texture_.data[c])) : 0.0;
-                float v = static_cast<float>(a_ * (linear ? conv : std::pow(conv, b_)));
+                float v = post_process(conv);
                 if (!std::isfinite(v)) {
                     ++layer_nonfinite[static_cast<std::size_t>(k)];
                     v = 0.0f;
@@ -123,55 +112,32 @@ public:
         });
         std::int64_t nonfinite = 0;
         for (std::int64_t n : layer_nonfinite) nonfinite += n;
-        stages_.emplace_back("curvature", ms_since(t0));
+        update_stages_.emplace_back("curvature", watch.ms());
 
         // Viscosity post-process (Sec. 3.3) below the threshold height under the mean interface.
-        double mean = 0.0;
-        for (float z : hf.height) mean += z;
-        surface_z_ = hf.height.empty() ? 0.0 : mean / static_cast<double>(hf.height.size());
+        surface_z_ = mean_height(hf);
         std::int64_t clamped = 0;
         if (dissipation_steps_ > 0) {
-            t0 = std::chrono::steady_clock::now();
+            watch.reset();
             const double z_threshold = surface_z_ - threshold_height_;
             const int layer = static_cast<int>(std::floor((z_threshold - shape.origin.z) / shape.spacing));
             dissipate_below(texture_, std::clamp(layer, 0, shape.nz - 1), dissipation_steps_, clamped);
-            stages_.emplace_back("dissipation", ms_since(t0));
+            update_stages_.emplace_back("dissipation", watch.ms());
         }
         health_.add("not_converged", stats.not_converged);
         health_.add("nonfinite", stats.nonfinite + nonfinite);
         health_.add("clamped", clamped);
-        built_frame_ = frame.frame;
-        built_scene_ = frame.scene;
+        mark_built(frame);
     }
-
-    CausticOutput render(const FrameGeometry& frame, const RenderRequest& request) override {
-        if (built_scene_ != frame.scene || built_frame_ != frame.frame) update(frame);
-        VolumeLookup lookup;
-        lookup.texture = &texture_;
-        lookup.normalize_flux = normalize_flux_;
-        lookup.ior = ior_;
-        lookup.scaled_ior = scaled_ior_;
-        lookup.surface_z = surface_z_;
-        CausticOutput out = render_volume_texture(frame, request, lookup);
-        for (const auto& [name, n] : health_.counters) out.health.add(name, n);
-        return out;
-    }
-
-    // For tests and benchmarks: the texture of the last update() and its stage timings.
-    const VolumeF& texture() const { return texture_; }
 
 private:
+    void configure_lookup(VolumeLookup& lookup) const override { lookup.scaled_ior = scaled_ior_; }
+
     int grid_, dissipation_steps_;
-    double threshold_height_, embed_margin_, a_, b_;
-    bool scaled_ior_, normalize_flux_, embed_;
+    double threshold_height_, embed_margin_;
+    bool scaled_ior_, embed_;
     eikonal::Options options_;
     eikonal::Workspace workspace_;  // the eikonal solution; its storage is reused by the next update
-    VolumeF texture_;
-    double ior_ = 1.33, surface_z_ = 0.0;
-    Health health_;
-    std::vector<std::pair<std::string, double>> stages_;
-    int built_frame_ = -1;
-    const Scene* built_scene_ = nullptr;
 };
 
 MethodInfo eikonal_fmm_info() {
@@ -202,14 +168,11 @@ MethodInfo eikonal_fmm_info() {
          "boundary=embed: fraction of the horizontal extent added on each side"},
         {"threshold_height", ParamType::Float, "0.3", 0.0, 1000.0, {},
          "depth [m] below the mean interface height where the dissipation post-process starts"},
-        {"a", ParamType::Float, "1", 1e-12, 1e12, {}, "post-process a * c^b of the caustic value c (Sec. 4.1): a"},
-        {"b", ParamType::Float, "1", 0.05, 10.0, {}, "post-process a * c^b (Sec. 4.1): exponent b"},
         {"ior_model", ParamType::Enum, "infinite", 0, 0, {"infinite", "scaled"},
          "infinite: fronts along interface normals (the paper); scaled: depth along the mean refracted "
          "direction scaled by (n-1)/n so the paraxial focus lands at n R / (n-1) (Fig. 2b)"},
-        {"normalize", ParamType::Enum, "flux", 0, 0, {"flux", "raw"},
-         "flux: scale so the receiver's mean equals the irradiance a flat interface transmits; raw: texture values"},
     };
+    for (ParamSpec& spec : volume_texture_post_params("c")) info.params.push_back(std::move(spec));
     info.create = [](const ParamSet& p) -> std::unique_ptr<Method> { return std::make_unique<EikonalFmm>(p); };
     return info;
 }

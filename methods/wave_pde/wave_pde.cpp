@@ -6,9 +6,8 @@
 // By default (stop=arrival) each cell sums phi until the downward front has passed it by `margin`
 // cells, and only a window of layers around the front is updated (see arrival_steps for why the sum
 // to convergence, Algorithm 3's stop, carries no caustic).
-// render(): trilinear lookups at the receiver points (shared with eikonal_fmm, harness/volume_grid).
+// render(): trilinear lookups at the receiver points (harness/volume_texture_method, volume_grid).
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 
@@ -16,17 +15,15 @@
 
 #include "errors.hpp"
 #include "registry.hpp"
+#include "timing.hpp"
 #include "volume_grid.hpp"
+#include "volume_texture_method.hpp"
 #include "wave_solver.hpp"
 
 namespace caustics {
 namespace {
 
 constexpr double kMaxCourant = 0.5773502691896258;  // 1 / sqrt(3): 3-D leapfrog stability bound
-
-double ms_since(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
 
 // cells: phi = 1 on cells the interface crosses (the paper): the interface's range over the cell's
 // footprint (corners and centre) overlaps the cell's z-range. smooth: phi = exp(-d^2 / 2h^2) of the
@@ -66,15 +63,13 @@ std::vector<float> interface_cells(const HeightField& hf, const VolumeShape& s, 
     return init;
 }
 
-class WavePde final : public Method {
+class WavePde final : public VolumeTextureMethod {
 public:
     explicit WavePde(const ParamSet& p)
-        : grid_(static_cast<int>(p.get_int("grid"))),
+        : VolumeTextureMethod(p),
+          grid_(static_cast<int>(p.get_int("grid"))),
           steps_(static_cast<int>(p.get_int("iterations"))),
           epsilon_(p.get_float("epsilon")),
-          a_(p.get_float("a")),
-          b_(p.get_float("b")),
-          normalize_flux_(p.get_enum("normalize") == "flux"),
           smooth_init_(p.get_enum("init") == "smooth"),
           stop_epsilon_(p.get_enum("stop") == "epsilon"),
           margin_(p.get_float("margin")) {
@@ -85,13 +80,9 @@ public:
         settings_.clamp_negative = p.get_bool("clamp_negative");
     }
 
-    Capability capabilities(const Scene& scene) const override {
-        const std::string why = volume_caustics_unsupported(scene);
-        return why.empty() ? Capability::yes() : Capability::no(why);
-    }
-
     void update(const FrameGeometry& frame) override {
         health_ = Health{};
+        update_stages_.clear();
         const ObjectInstance* water = find_water_interface(frame);
         if (!water) throw InputError(frame.scene->path, "objects", "wave_pde needs a height-field dielectric interface");
         ior_ = water->object->material.ior;
@@ -99,13 +90,13 @@ public:
         const VolumeShape interior = caustic_volume(frame, *water, grid_, 0.0);
         const VolumeShape full = interior.padded(settings_.sponge);
 
-        auto t0 = std::chrono::steady_clock::now();
+        Stopwatch watch;
         wave::Simulation sim(full, settings_);
         sim.set_initial(interface_cells(hf, full, smooth_init_));
         std::vector<float> accumulated(full.size(), 0.0f);
-        init_ms_ = ms_since(t0);
+        update_stages_.emplace_back("init", watch.ms());
 
-        t0 = std::chrono::steady_clock::now();
+        watch.reset();
         const bool window = steps_ == 0 && !stop_epsilon_;
         const int cap = steps_ > 0 ? steps_ : stop_epsilon_ ? epsilon_step_cap(full) : arrival_steps(hf, interior);
         // stop=arrival: the layer of the downward front's centre at step 0 (cell centres at k + 1/2).
@@ -130,11 +121,11 @@ public:
         }
         sim.flush(&accumulated);
         steps_taken_ = step;
-        solve_ms_ = ms_since(t0);
+        update_stages_.emplace_back("solve", watch.ms());
         if (steps_ == 0 && stop_epsilon_ && !settled && finite) health_.add("not_converged");
 
         // The texture over the interior box; a * max(0, C)^b.
-        t0 = std::chrono::steady_clock::now();
+        watch.reset();
         texture_ = VolumeF(interior);
         const int pad = settings_.sponge;
         std::int64_t negative = 0, nonfinite = 0;
@@ -150,20 +141,17 @@ public:
                         ++negative;
                         c = 0.0;
                     }
-                    texture_.at(i, j, k) = static_cast<float>(a_ * (b_ == 1.0 ? c : std::pow(c, b_)));
+                    texture_.at(i, j, k) = post_process(c);
                 }
-        post_ms_ = ms_since(t0);
+        update_stages_.emplace_back("post_process", watch.ms());
 
         health_.add("clamped", sim.clamped() + negative);
         health_.add("nonfinite", nonfinite);
         health_.add("cfl_violations", settings_.courant > kMaxCourant ? 1 : 0);  // refused by the parameter range
         health_.add("steps", steps_taken_);
         health_.add("cells_updated", sim.cells_updated());
-        double mean = 0.0;
-        for (float z : hf.height) mean += z;
-        surface_z_ = hf.height.empty() ? 0.0 : mean / static_cast<double>(hf.height.size());
-        built_frame_ = frame.frame;
-        built_scene_ = frame.scene;
+        surface_z_ = mean_height(hf);
+        mark_built(frame);
     }
 
     // stop=arrival: an upper bound of the steps (the front's centre margin_ past the bottom of the
@@ -186,30 +174,13 @@ public:
         return static_cast<int>(std::ceil(20.0 * (full.nx + full.ny + full.nz) / settings_.courant));
     }
 
-    CausticOutput render(const FrameGeometry& frame, const RenderRequest& request) override {
-        if (built_scene_ != frame.scene || built_frame_ != frame.frame) update(frame);
-        VolumeLookup lookup;
-        lookup.texture = &texture_;
-        lookup.normalize_flux = normalize_flux_;
-        lookup.ior = ior_;
-        lookup.surface_z = surface_z_;
-        CausticOutput out = render_volume_texture(frame, request, lookup);
-        for (const auto& [name, n] : health_.counters) out.health.add(name, n);
-        return out;
-    }
-
 private:
     int grid_, steps_;
-    double epsilon_, a_, b_;
-    bool normalize_flux_, smooth_init_, stop_epsilon_;
+    double epsilon_;
+    bool smooth_init_, stop_epsilon_;
     double margin_;
     wave::Settings settings_;
-    VolumeF texture_;
-    double ior_ = 1.33, surface_z_ = 0.0, init_ms_ = 0.0, solve_ms_ = 0.0, post_ms_ = 0.0;
     int steps_taken_ = 0;
-    Health health_;
-    int built_frame_ = -1;
-    const Scene* built_scene_ = nullptr;
 };
 
 MethodInfo wave_pde_info() {
@@ -251,11 +222,8 @@ MethodInfo wave_pde_info() {
          "update only x rows next to non-zero values (Sec. 4: the wave has a finite speed)"},
         {"clamp_negative", ParamType::Bool, "false", 0, 0, {},
          "clamp phi to non-negative values after every step (Sec. 5.2; localizes the wave, adds error)"},
-        {"a", ParamType::Float, "1", 1e-12, 1e12, {}, "post-process a * C^b of the accumulated value C (Sec. 4.1): a"},
-        {"b", ParamType::Float, "1", 0.05, 10.0, {}, "post-process a * C^b (Sec. 4.1): exponent b"},
-        {"normalize", ParamType::Enum, "flux", 0, 0, {"flux", "raw"},
-         "flux: scale so the receiver's mean equals the irradiance a flat interface transmits; raw: texture values"},
     };
+    for (ParamSpec& spec : volume_texture_post_params("C")) info.params.push_back(std::move(spec));
     info.create = [](const ParamSet& p) -> std::unique_ptr<Method> { return std::make_unique<WavePde>(p); };
     return info;
 }
