@@ -37,6 +37,26 @@ namespace {
     i1 = i0 + 1;
 }
 
+// The grid cell around (x, y) and the position inside it (a single-vertex axis gives i0 = i1 = 0).
+struct GridCell {
+    int i0, i1, j0, j1;
+    double fx, fy;
+};
+
+[[gnu::always_inline]] inline GridCell locate(const HeightField& hf, double x, double y) {
+    GridCell c;
+    grid_coord(x, hf.origin.x, hf.spacing.x, hf.nx, hf.periodic, c.i0, c.i1, c.fx);
+    grid_coord(y, hf.origin.y, hf.spacing.y, hf.ny, hf.periodic, c.j0, c.j1, c.fy);
+    return c;
+}
+
+// Bilinear interpolation of the vertex values value(i, j) over the cell.
+template <class Value>
+[[gnu::always_inline]] inline auto bilinear(const GridCell& c, Value value) {
+    const auto a = value(c.i0, c.j0), b = value(c.i1, c.j0), d = value(c.i0, c.j1), e = value(c.i1, c.j1);
+    return (1.0 - c.fy) * ((1.0 - c.fx) * a + c.fx * b) + c.fy * ((1.0 - c.fx) * d + c.fx * e);
+}
+
 }  // namespace
 
 bool HeightField::contains(double x, double y) const {
@@ -45,26 +65,12 @@ bool HeightField::contains(double x, double y) const {
 }
 
 double HeightField::sample_height(double x, double y) const {
-    int i0, i1, j0, j1;
-    double fx, fy;
-    grid_coord(x, origin.x, spacing.x, nx, periodic, i0, i1, fx);
-    grid_coord(y, origin.y, spacing.y, ny, periodic, j0, j1, fy);
-    if (nx == 1) i1 = 0;
-    if (ny == 1) j1 = 0;
-    const double a = z(i0, j0), b = z(i1, j0), c = z(i0, j1), d = z(i1, j1);
-    return (1.0 - fy) * ((1.0 - fx) * a + fx * b) + fy * ((1.0 - fx) * c + fx * d);
+    return bilinear(locate(*this, x, y), [this](int i, int j) { return static_cast<double>(z(i, j)); });
 }
 
 glm::dvec2 HeightField::sample_gradient(double x, double y) const {
     if (exact_gradient) return exact_gradient(x, y);
-    int i0, i1, j0, j1;
-    double fx, fy;
-    grid_coord(x, origin.x, spacing.x, nx, periodic, i0, i1, fx);
-    grid_coord(y, origin.y, spacing.y, ny, periodic, j0, j1, fy);
-    if (nx == 1) i1 = 0;
-    if (ny == 1) j1 = 0;
-    const glm::dvec2 a = grad(i0, j0), b = grad(i1, j0), c = grad(i0, j1), d = grad(i1, j1);
-    return (1.0 - fy) * ((1.0 - fx) * a + fx * b) + fy * ((1.0 - fx) * c + fx * d);
+    return bilinear(locate(*this, x, y), [this](int i, int j) { return glm::dvec2(grad(i, j)); });
 }
 
 glm::dvec3 HeightField::sample_normal(double x, double y) const {
