@@ -360,6 +360,16 @@ struct LookupContext {
     double depth_scale = 1.0;
 };
 
+// Whether light reaches p through the water's rectangle along the mean refracted direction.
+bool lit(const LookupContext& ctx, const glm::dvec3& p) {
+    const VolumeLookup& l = *ctx.lookup;
+    if (!(l.water_hi.x > l.water_lo.x && l.water_hi.y > l.water_lo.y)) return true;
+    const glm::dvec3& t = ctx.refracted;
+    const double along = (l.surface_z - p.z) / std::max(-t.z, 1e-6);
+    const glm::dvec2 entry = glm::dvec2(p) - along * glm::dvec2(t);
+    return entry.x >= l.water_lo.x && entry.x <= l.water_hi.x && entry.y >= l.water_lo.y && entry.y <= l.water_hi.y;
+}
+
 // Texture value at a receiver point; false when it falls outside the box.
 bool lookup_value(const LookupContext& ctx, glm::dvec3 p, float& value, bool& clamped) {
     const VolumeShape& s = ctx.lookup->texture->shape;
@@ -367,6 +377,10 @@ bool lookup_value(const LookupContext& ctx, glm::dvec3 p, float& value, bool& cl
     if (!s.contains(p)) {
         value = 0.0f;
         return false;
+    }
+    if (!lit(ctx, p)) {
+        value = 0.0f;
+        return true;
     }
     if (ctx.lookup->scaled_ior) {
         const glm::dvec3& t = ctx.refracted;
@@ -435,8 +449,9 @@ CausticOutput render_volume_texture(const FrameGeometry& frame, const RenderRequ
                 const double a = chart->bin_area(i, j);
                 const double v = receiver.at(i, j);
                 if (std::isfinite(v)) sum += a * v;
-                target += a * flat_transmitted_irradiance(scene, lookup.ior,
-                                                          chart->normal((i + 0.5) / chart->width(), (j + 0.5) / chart->height()));
+                const double u = (i + 0.5) / chart->width(), w = (j + 0.5) / chart->height();
+                if (lit(ctx, chart->point(u, w)))
+                    target += a * flat_transmitted_irradiance(scene, lookup.ior, chart->normal(u, w));
                 area += a;
             }
         if (sum > 0.0 && area > 0.0) scale = target / sum;

@@ -131,6 +131,11 @@ struct VolumeLookup {
     // the paraxial focus R of the infinite model to n R / (n - 1).
     bool scaled_ior = false;
     double surface_z = 0.0;
+    // Light enters through the water's rectangle only (when given, hi > lo): a point whose ray along
+    // the mean refracted direction (the flat interface's) comes from outside it is unlit and reads 0,
+    // and the flux normalization leaves it out. Only oblique light makes such points inside the box:
+    // the strip below the water's edge that the refracted sunlight moves away from.
+    glm::dvec2 water_lo{0.0}, water_hi{0.0};
 };
 
 // Fills the receiver map (trilinear lookup at every bin's centre point) and the camera view (at the

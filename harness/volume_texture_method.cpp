@@ -19,10 +19,12 @@ Capability VolumeTextureMethod::capabilities(const Scene& scene) const {
     return why.empty() ? Capability::yes() : Capability::no(why);
 }
 
-double VolumeTextureMethod::mean_height(const HeightField& interface) {
+void VolumeTextureMethod::set_interface(const HeightField& interface) {
     double mean = 0.0;
     for (float z : interface.height) mean += z;
-    return interface.height.empty() ? 0.0 : mean / static_cast<double>(interface.height.size());
+    surface_z_ = interface.height.empty() ? 0.0 : mean / static_cast<double>(interface.height.size());
+    water_lo_ = interface.origin;
+    water_hi_ = interface.origin + interface.extent();
 }
 
 CausticOutput VolumeTextureMethod::render(const FrameGeometry& frame, const RenderRequest& request) {
@@ -32,6 +34,8 @@ CausticOutput VolumeTextureMethod::render(const FrameGeometry& frame, const Rend
     lookup.normalize_flux = normalize_flux_;
     lookup.ior = ior_;
     lookup.surface_z = surface_z_;
+    lookup.water_lo = water_lo_;
+    lookup.water_hi = water_hi_;
     configure_lookup(lookup);
     CausticOutput out = render_volume_texture(frame, request, lookup);
     for (const auto& [name, n] : health_.counters) out.health.add(name, n);

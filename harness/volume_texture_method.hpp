@@ -32,8 +32,9 @@ protected:
 
     // a * value^b of a non-negative value.
     float post_process(double value) const { return static_cast<float>(a_ * (b_ == 1.0 ? value : std::pow(value, b_))); }
-    // The mean interface height: the depth origin of the lookups (surface_z_).
-    static double mean_height(const HeightField& interface);
+    // The lookups' water: its mean height (surface_z_, their depth origin) and its rectangle (light
+    // enters through it only).
+    void set_interface(const HeightField& interface);
     // Call at the end of update(): render() reads the texture without rebuilding it for this frame.
     void mark_built(const FrameGeometry& frame) {
         built_frame_ = frame.frame;
@@ -46,6 +47,7 @@ protected:
     bool normalize_flux_;
     VolumeF texture_;
     double ior_ = 1.33, surface_z_ = 0.0;
+    glm::dvec2 water_lo_{0.0}, water_hi_{0.0};
     Health health_;
     std::vector<std::pair<std::string, double>> update_stages_;
 

@@ -115,7 +115,7 @@ public:
         update_stages_.emplace_back("curvature", watch.ms());
 
         // Viscosity post-process (Sec. 3.3) below the threshold height under the mean interface.
-        surface_z_ = mean_height(hf);
+        set_interface(hf);
         std::int64_t clamped = 0;
         if (dissipation_steps_ > 0) {
             watch.reset();

@@ -10,10 +10,12 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
 
 #include <tbb/parallel_for.h>
 
 #include "errors.hpp"
+#include "frame.hpp"
 #include "registry.hpp"
 #include "timing.hpp"
 #include "volume_grid.hpp"
@@ -72,12 +74,24 @@ public:
           epsilon_(p.get_float("epsilon")),
           smooth_init_(p.get_enum("init") == "smooth"),
           stop_epsilon_(p.get_enum("stop") == "epsilon"),
-          margin_(p.get_float("margin")) {
+          margin_(p.get_float("margin")),
+          sides_(p.get_enum("sides")) {
         settings_.courant = p.get_float("courant");
         settings_.sponge = static_cast<int>(p.get_int("sponge"));
         settings_.sponge_strength = p.get_float("sponge_strength");
         settings_.narrow_band = p.get_bool("narrow_band");
         settings_.clamp_negative = p.get_bool("clamp_negative");
+    }
+
+    Capability capabilities(const Scene& scene) const override {
+        Capability base = VolumeTextureMethod::capabilities(scene);
+        if (!base.supported || sides_ != "periodic") return base;
+        // The texture box of frame 0 (the water's footprint does not change between frames).
+        const FrameGeometry frame = build_frame_geometry(scene, 0);
+        const ObjectInstance* water = find_water_interface(frame);
+        if (water && tiles_box(*water->heightfield, caustic_volume(frame, *water, grid_, 0.0))) return base;
+        return Capability::no("sides=periodic needs a tiling water surface (noise generator) whose period is "
+                              "the texture box; use sides=auto, mirror or sponge");
     }
 
     void update(const FrameGeometry& frame) override {
@@ -88,10 +102,19 @@ public:
         ior_ = water->object->material.ior;
         const HeightField& hf = *water->heightfield;
         const VolumeShape interior = caustic_volume(frame, *water, grid_, 0.0);
-        const VolumeShape full = interior.padded(settings_.sponge);
+        wave::Settings settings = settings_;
+        settings.sides = resolve_sides(hf, interior, frame.scene->path);
+        // The damping band pads the z faces always, the x and y faces only where they are not mirror
+        // or periodic.
+        const int pad_xy = settings.sides == wave::Sides::Zero ? settings.sponge : 0, pad_z = settings.sponge;
+        VolumeShape full = interior;
+        full.nx += 2 * pad_xy;
+        full.ny += 2 * pad_xy;
+        full.nz += 2 * pad_z;
+        full.origin -= interior.spacing * glm::dvec3(pad_xy, pad_xy, pad_z);
 
         Stopwatch watch;
-        wave::Simulation sim(full, settings_);
+        wave::Simulation sim(full, settings);
         sim.set_initial(interface_cells(hf, full, smooth_init_));
         std::vector<float> accumulated(full.size(), 0.0f);
         update_stages_.emplace_back("init", watch.ms());
@@ -127,12 +150,11 @@ public:
         // The texture over the interior box; a * max(0, C)^b.
         watch.reset();
         texture_ = VolumeF(interior);
-        const int pad = settings_.sponge;
         std::int64_t negative = 0, nonfinite = 0;
         for (int k = 0; k < interior.nz; ++k)
             for (int j = 0; j < interior.ny; ++j)
                 for (int i = 0; i < interior.nx; ++i) {
-                    double c = accumulated[full.index(i + pad, j + pad, k + pad)];
+                    double c = accumulated[full.index(i + pad_xy, j + pad_xy, k + pad_z)];
                     if (!std::isfinite(c) || !finite) {
                         ++nonfinite;
                         c = 0.0;
@@ -150,8 +172,25 @@ public:
         health_.add("cfl_violations", settings_.courant > kMaxCourant ? 1 : 0);  // refused by the parameter range
         health_.add("steps", steps_taken_);
         health_.add("cells_updated", sim.cells_updated());
-        surface_z_ = mean_height(hf);
+        set_interface(hf);
         mark_built(frame);
+    }
+
+    // The surface repeats with the box's period along x and y: a periodic field whose rectangle is
+    // the texture box, up to round-off.
+    static bool tiles_box(const HeightField& hf, const VolumeShape& box) {
+        if (!hf.periodic) return false;
+        const glm::dvec2 ext = hf.extent(), box_ext(box.extent());
+        const double tol = 1e-6 * std::max(ext.x, ext.y);
+        return std::fabs(box.origin.x - hf.origin.x) < tol && std::fabs(box.origin.y - hf.origin.y) < tol &&
+               std::fabs(box_ext.x - ext.x) < tol && std::fabs(box_ext.y - ext.y) < tol;
+    }
+    wave::Sides resolve_sides(const HeightField& hf, const VolumeShape& box, const std::string& scene_path) const {
+        if (sides_ == "sponge") return wave::Sides::Zero;
+        if (sides_ == "mirror") return wave::Sides::Mirror;
+        if (tiles_box(hf, box)) return wave::Sides::Periodic;
+        if (sides_ == "periodic") throw InputError(scene_path, "sides", "periodic needs a water surface that tiles the texture box (auto, mirror or sponge otherwise)");
+        return wave::Sides::Mirror;
     }
 
     // stop=arrival: an upper bound of the steps (the front's centre margin_ past the bottom of the
@@ -179,6 +218,7 @@ private:
     double epsilon_;
     bool smooth_init_, stop_epsilon_;
     double margin_;
+    std::string sides_;
     wave::Settings settings_;
     int steps_taken_ = 0;
 };
@@ -213,9 +253,14 @@ MethodInfo wave_pde_info() {
          "past it (3: the initial sheet's half-width; 6 also takes the scheme's dispersive tail behind "
          "the pulse; much more adds the wakes that cancel the caustic)"},
         {"epsilon", ParamType::Float, "0.001", 1e-9, 1.0, {}, "iterations=0, stop=epsilon: stop when every |phi| is below this"},
+        {"sides", ParamType::Enum, "auto", 0, 0, {"auto", "sponge", "mirror", "periodic"},
+         "the volume's x and y faces: sponge = the damping band (the paper; the texture darkens within "
+         "about sqrt(6 depth h) of them, where the accumulated sheet is cut off), mirror = zero normal "
+         "derivative (the sheet continues as its mirror image), periodic = the field wraps (only for a "
+         "tiling water surface whose period is the texture box), auto = periodic where it applies, else mirror"},
         {"sponge", ParamType::Int, "12", 0, 256, {},
-         "damping band width in cells on every side of the volume (smooth quadratic ramp) so the domain "
-         "boundary does not reflect"},
+         "damping band width in cells on the volume's faces (top and bottom; also the sides with "
+         "sides=sponge), a smooth quadratic ramp so the domain boundary does not reflect"},
         {"sponge_strength", ParamType::Float, "0.5", 0.0, 100.0, {},
          "damping coefficient sigma (per unit time, c = h = 1) at the outer edge of the band"},
         {"narrow_band", ParamType::Bool, "true", 0, 0, {},

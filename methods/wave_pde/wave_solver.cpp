@@ -34,13 +34,14 @@ std::vector<int> band_depth(int n, int sponge) {
 // inf): an integer maximum, which vectorises where a float one would not (NaN ordering).
 // Kept out of line: inlined into the tile loop, GCC no longer vectorises it.
 template <bool Clamp, bool Accumulate>
-[[gnu::noinline]] std::uint32_t update_row(int n, const float* __restrict c, const float* __restrict ym, const float* __restrict yp,
+[[gnu::noinline]] std::uint32_t update_row(int n, Sides sides, const float* __restrict c, const float* __restrict ym, const float* __restrict yp,
                          const float* __restrict zm, const float* __restrict zp, float* __restrict p,
                          float* __restrict acc, const float* __restrict a, const float* __restrict b,
                          const float* __restrict l, std::int64_t& clamped) {
     std::uint32_t top = 0;
     std::int64_t negative = 0;
-    // The x faces (zero neighbour outside the grid), scalar.
+    // The x faces, scalar: the neighbour outside the grid is zero, the cell itself (mirror) or the
+    // opposite end of the row (periodic).
     auto edge = [&](int i, float left, float right) {
         const float lap = left + right + ym[i] + yp[i] + zm[i] + zp[i] - 6.0f * c[i];
         float next = a[i] * c[i] - b[i] * p[i] + l[i] * lap;
@@ -52,11 +53,14 @@ template <bool Clamp, bool Accumulate>
         p[i] = next;
         top = std::max(top, abs_bits(next));
     };
-    edge(0, 0.0f, n > 1 ? c[1] : 0.0f);
+    const float outside_left = sides == Sides::Zero ? 0.0f : sides == Sides::Mirror ? c[0] : c[n - 1];
+    const float outside_right = sides == Sides::Zero ? 0.0f : sides == Sides::Mirror ? c[n - 1] : c[0];
     if (n == 1) {
+        edge(0, outside_left, outside_right);
         clamped += negative;
         return top;
     }
+    edge(0, outside_left, c[1]);
     // The interior of the row: branch-free and vectorised.
     for (int i = 1; i + 1 < n; ++i) {
         const float lap = c[i - 1] + c[i + 1] + ym[i] + yp[i] + zm[i] + zp[i] - 6.0f * c[i];
@@ -70,7 +74,7 @@ template <bool Clamp, bool Accumulate>
         const std::uint32_t bits = abs_bits(next);
         top = top > bits ? top : bits;
     }
-    edge(n - 1, c[n - 2], 0.0f);
+    edge(n - 1, c[n - 2], outside_right);
     clamped += negative;
     return top;
 }
@@ -79,7 +83,8 @@ template <bool Clamp, bool Accumulate>
 
 Simulation::Simulation(const VolumeShape& shape, const Settings& settings)
     : shape_(shape), settings_(settings), cur_(shape.size(), 0.0f), prev_(shape.size(), 0.0f),
-      depth_x_(band_depth(shape.nx, settings.sponge)), depth_y_(band_depth(shape.ny, settings.sponge)),
+      depth_x_(band_depth(shape.nx, settings.sides == Sides::Zero ? settings.sponge : 0)),
+      depth_y_(band_depth(shape.ny, settings.sides == Sides::Zero ? settings.sponge : 0)),
       depth_z_(band_depth(shape.nz, settings.sponge)),
       row_cur_(static_cast<std::size_t>(shape.ny) * shape.nz, 0), row_prev_(row_cur_),
       zero_row_(static_cast<std::size_t>(shape.nx), 0.0f) {
@@ -120,6 +125,7 @@ double Simulation::step(std::vector<float>* accumulate, int accumulate_top) {
     const std::size_t layer = static_cast<std::size_t>(nx) * ny;
     const std::uint32_t threshold_bits = std::bit_cast<std::uint32_t>(kBandThreshold);
     const bool band = settings_.narrow_band, clamp = settings_.clamp_negative;
+    const Sides sides = settings_.sides;
     // Levels are accumulated in pairs: the odd steps add phi^n + phi^{n-1}; flush() adds a last odd one.
     const bool pair = steps_ % 2 == 1;
     if (accumulate) pending_ = !pair;
@@ -156,15 +162,20 @@ double Simulation::step(std::vector<float>* accumulate, int accumulate_top) {
         for (int j = j0; j < j1; ++j) {
             const std::size_t kk = static_cast<std::size_t>(k);
             const std::size_t r = kk * ny + j;
+            // The y neighbour rows across the y faces: none (zero), the row itself (mirror) or the
+            // opposite face's row (periodic).
+            const bool wrap = sides == Sides::Periodic;
+            const std::ptrdiff_t dym = j > 0 ? -1 : wrap ? ny - 1 : 0, dyp = j + 1 < ny ? 1 : wrap ? 1 - ny : 0;
             if (band) {
-                const bool near = row_cur_[r] || row_prev_[r] || (j > 0 && row_cur_[r - 1]) || (j + 1 < ny && row_cur_[r + 1]) ||
+                const bool near = row_cur_[r] || row_prev_[r] || row_cur_[r + dym] || row_cur_[r + dyp] ||
                                   (k > 0 && row_cur_[r - ny]) || (k + 1 < nz && row_cur_[r + ny]);
                 if (!near) continue;  // phi^n and phi^{n-1} are exact zeros here and around: so is phi^{n+1}
             }
             const std::size_t row = r * nx;
             const float* c = cur_.data() + row;
-            const float* ym = j > 0 ? c - nx : zero_row_.data();
-            const float* yp = j + 1 < ny ? c + nx : zero_row_.data();
+            const bool zero_y = sides == Sides::Zero;
+            const float* ym = j > 0 || !zero_y ? c + dym * nx : zero_row_.data();
+            const float* yp = j + 1 < ny || !zero_y ? c + dyp * nx : zero_row_.data();
             const float* zm = k > 0 ? c - layer : zero_row_.data();
             const float* zp = k + 1 < nz ? c + layer : zero_row_.data();
             float* p = prev_.data() + row;
@@ -174,10 +185,10 @@ double Simulation::step(std::vector<float>* accumulate, int accumulate_top) {
             const float* b = a + nx;
             const float* l = b + nx;
             const std::uint32_t row_top =
-                clamp ? (acc ? update_row<true, true>(nx, c, ym, yp, zm, zp, p, acc, a, b, l, clamped)
-                             : update_row<true, false>(nx, c, ym, yp, zm, zp, p, acc, a, b, l, clamped))
-                      : (acc ? update_row<false, true>(nx, c, ym, yp, zm, zp, p, acc, a, b, l, clamped)
-                             : update_row<false, false>(nx, c, ym, yp, zm, zp, p, acc, a, b, l, clamped));
+                clamp ? (acc ? update_row<true, true>(nx, sides, c, ym, yp, zm, zp, p, acc, a, b, l, clamped)
+                             : update_row<true, false>(nx, sides, c, ym, yp, zm, zp, p, acc, a, b, l, clamped))
+                      : (acc ? update_row<false, true>(nx, sides, c, ym, yp, zm, zp, p, acc, a, b, l, clamped)
+                             : update_row<false, false>(nx, sides, c, ym, yp, zm, zp, p, acc, a, b, l, clamped));
             ++rows;
             top = std::max(top, row_top);
             const bool nonzero = !band || row_top > threshold_bits;
@@ -212,12 +223,22 @@ void Simulation::flush(std::vector<float>* accumulate) {
 
 namespace {
 
-double energy_box(const std::vector<float>& a_cur, const std::vector<float>& a_prev, const VolumeShape& sa,
+double energy_box(const std::vector<float>& a_cur, const std::vector<float>& a_prev, const VolumeShape& sa, Sides sides,
                   const std::vector<float>* b_cur, const std::vector<float>* b_prev, const VolumeShape* sb,
                   glm::ivec3 lo, glm::ivec3 hi, glm::ivec3 offset, double lam) {
-    // Field value (difference with b when given); cells outside the grid of a are zero.
+    // Across a's x and y faces: the mirrored cell (mirror) or the wrapped one (periodic).
+    auto side = [sides](int i, int n) {
+        if (sides == Sides::Mirror) return std::clamp(i, 0, n - 1);
+        if (sides == Sides::Periodic) return (i % n + n) % n;
+        return i;
+    };
+    // Field value (difference with b when given); other cells outside the grid of a are zero.
     auto value = [&](const std::vector<float>& av, const std::vector<float>* bv, int i, int j, int k) -> double {
         double v = 0.0;
+        if (!bv) {
+            i = side(i, sa.nx);
+            j = side(j, sa.ny);
+        }
         if (i >= 0 && j >= 0 && k >= 0 && i < sa.nx && j < sa.ny && k < sa.nz) v = av[sa.index(i, j, k)];
         if (bv) {
             const int bi = i + offset.x, bj = j + offset.y, bk = k + offset.z;
@@ -237,7 +258,9 @@ double energy_box(const std::vector<float>& a_cur, const std::vector<float>& a_p
                     const double un = value(a_cur, b_cur, i + e[0], j + e[1], k + e[2]);
                     const double pn = value(a_prev, b_prev, i + e[0], j + e[1], k + e[2]);
                     potential += (u - un) * (p - pn);
-                    const bool low_face = (e[0] && i == lo.x) || (e[1] && j == lo.y) || (e[2] && k == lo.z);
+                    // Across periodic x and y faces the low face's edge is the high face's, counted there.
+                    const bool wrapped = sides == Sides::Periodic && !e[2];
+                    const bool low_face = !wrapped && ((e[0] && i == lo.x) || (e[1] && j == lo.y) || (e[2] && k == lo.z));
                     if (low_face) {
                         const double um = value(a_cur, b_cur, i - e[0], j - e[1], k - e[2]);
                         const double pm = value(a_prev, b_prev, i - e[0], j - e[1], k - e[2]);
@@ -252,13 +275,13 @@ double energy_box(const std::vector<float>& a_cur, const std::vector<float>& a_p
 
 double Simulation::energy() const {
     const double lam = settings_.courant * settings_.courant;
-    return energy_box(cur_, prev_, shape_, nullptr, nullptr, nullptr, glm::ivec3(0),
+    return energy_box(cur_, prev_, shape_, settings_.sides, nullptr, nullptr, nullptr, glm::ivec3(0),
                       glm::ivec3(shape_.nx, shape_.ny, shape_.nz), glm::ivec3(0), lam);
 }
 
 double Simulation::difference_energy(const Simulation& other, glm::ivec3 lo, glm::ivec3 hi, glm::ivec3 offset) const {
     const double lam = settings_.courant * settings_.courant;
-    return energy_box(cur_, prev_, shape_, &other.cur_, &other.prev_, &other.shape_, lo, hi, offset, lam);
+    return energy_box(cur_, prev_, shape_, Sides::Zero, &other.cur_, &other.prev_, &other.shape_, lo, hi, offset, lam);
 }
 
 }  // namespace caustics::wave

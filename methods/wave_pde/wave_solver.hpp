@@ -1,7 +1,8 @@
 #pragma once
 // The wave equation of Mercier 2013, Sec. 4 (Eq. 5), phi_tt = c^2 Laplacian(phi), on a regular grid with
 // an explicit leapfrog scheme in grid units (c = 1, h = 1, dt = courant), zero (Dirichlet) values
-// outside the grid, and a damping band of `sponge` cells along every face:
+// outside the grid, and a damping band of `sponge` cells along every face (the x and y faces get
+// neither with Sides::Mirror or Sides::Periodic, see there):
 //   phi^{n+1} = (2 phi^n - (1 - s/2) phi^{n-1} + courant^2 L(phi^n)) / (1 + s/2),
 // s = sigma dt, sigma = strength * (d / sponge)^2 at depth d (cells) into the band: a smooth ramp so the
 // band itself does not reflect. Exposed for the tests; the plugin is wave_pde.cpp.
@@ -20,12 +21,18 @@
 
 namespace caustics::wave {
 
+// The x and y faces. Zero: Dirichlet zero outside, and the damping band (the paper). Mirror: zero
+// normal derivative at the face (the field continues as its mirror image). Periodic: the field wraps
+// (a surface that tiles the box). The z faces always have the zero exterior and the band.
+enum class Sides { Zero, Mirror, Periodic };
+
 struct Settings {
     double courant = 0.5;          // c dt / h; stable up to 1 / sqrt(3)
     int sponge = 0;                // damping band width in cells (part of the grid)
     double sponge_strength = 0.5;  // sigma at the outer face, per unit time (c = h = 1)
     bool narrow_band = true;       // update only x rows next to non-zero values (Sec. 4)
     bool clamp_negative = false;   // phi = max(phi, 0) after every step
+    Sides sides = Sides::Zero;
 };
 
 class Simulation {
@@ -43,7 +50,8 @@ public:
     double step(std::vector<float>* accumulate, int accumulate_top = std::numeric_limits<int>::max());
     void flush(std::vector<float>* accumulate);
     // Discrete energy ||phi^n - phi^{n-1}||^2 / courant^2 + <grad phi^n, grad phi^{n-1}> (edges to the
-    // zero exterior included): exactly conserved by leapfrog without damping.
+    // zero exterior included; across mirror faces none; across periodic ones the wrapped edges):
+    // exactly conserved by leapfrog without damping.
     double energy() const;
     // The same energy restricted to cells (and edges between cells) inside [lo, hi) index box, of the
     // difference of this simulation's field and `other`'s over that box (offset maps our box to theirs).
