@@ -1,6 +1,6 @@
 #pragma once
 // A regular 3-D scalar grid over an axis-aligned box, the storage of the 3-D caustic textures of
-// Mercier's eikonal and wave methods (methods/eikonal_fmm, methods/wave_pde). Cells are cubes of edge
+// Mercier's eikonal and wave methods. Cells are cubes of edge
 // `spacing`; value (i, j, k) sits at the cell centre origin + (i + 1/2, j + 1/2, k + 1/2) * spacing.
 // Also: the 7-point Laplacian (Mercier Eq. 4) and an indexed min-heap for fast marching.
 #include <cstddef>
@@ -111,38 +111,5 @@ double signed_distance_to_interface(const HeightField& hf, const glm::dvec3& p);
 // horizontal side; z at the same spacing.
 VolumeShape caustic_volume(const FrameGeometry& frame, const ObjectInstance& water, int grid,
                            double margin_fraction = 0.0);
-
-// Mean transmitted irradiance [W/m^2] that a flat interface would deliver onto a receiver with unit
-// normal `receiver_normal` (directional light `scene.lights[0]`, Fresnel transmittance when
-// scene.fresnel). The flux normalization of the relative volume methods targets it.
-double flat_transmitted_irradiance(const Scene& scene, double ior, const glm::dvec3& receiver_normal);
-// Refracted direction of the directional light through a horizontal interface (unit, downward).
-glm::dvec3 mean_refracted_direction(const Scene& scene, double ior);
-
-// ---- Receiver lookups into a caustic texture (the render() of the volume methods) ----
-
-struct VolumeLookup {
-    const VolumeF* texture = nullptr;   // caustic values; the box is texture->shape
-    bool normalize_flux = true;          // scale so the receiver's mean equals the transmitted irradiance
-    double ior = 1.33;                   // the interface's index (flux target, scaled mapping)
-    // Mercier's Fig. 2b: the texture was computed with an infinite refractive index (fronts move along
-    // the interface normals); a finite index is approximated by reading the texture at the point whose
-    // depth below `surface_z` along the mean refracted direction is scaled by (n - 1) / n, which maps
-    // the paraxial focus R of the infinite model to n R / (n - 1).
-    bool scaled_ior = false;
-    double surface_z = 0.0;
-    // Light enters through the water's rectangle only (when given, hi > lo): a point whose ray along
-    // the mean refracted direction (the flat interface's) comes from outside it is unlit and reads 0,
-    // and the flux normalization leaves it out. Only oblique light makes such points inside the box:
-    // the strip below the water's edge that the refracted sunlight moves away from.
-    glm::dvec2 water_lo{0.0}, water_hi{0.0};
-};
-
-// Fills the receiver map (trilinear lookup at every bin's centre point) and the camera view (at the
-// G-buffer positions of covered pixels) that `request` asks for. Points outside the box give 0 and
-// are counted in health "outside_volume". With normalize_flux the scale is fitted on the receiver map
-// (built from the scene's receiver resolution when the request has none).
-CausticOutput render_volume_texture(const FrameGeometry& frame, const RenderRequest& request,
-                                    const VolumeLookup& lookup);
 
 }  // namespace caustics

@@ -10,6 +10,7 @@
 #include "method.hpp"
 #include "params.hpp"
 #include "volume_grid.hpp"
+#include "volume_lookup.hpp"
 
 namespace caustics {
 
@@ -40,7 +41,7 @@ protected:
         built_frame_ = frame.frame;
         built_scene_ = frame.scene;
     }
-    // Lookup options beyond the shared ones (eikonal_fmm's ior_model).
+    // Lookup options beyond the shared ones (an ior model's mapping).
     virtual void configure_lookup(VolumeLookup& /*lookup*/) const {}
 
     double a_, b_;

@@ -18,6 +18,7 @@
 #include "frame.hpp"
 #include "registry.hpp"
 #include "volume_grid.hpp"
+#include "volume_lookup.hpp"
 #include "volume_method_support.hpp"
 
 using namespace caustics;
