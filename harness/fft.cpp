@@ -2,6 +2,7 @@
 #include "fft.hpp"
 
 #include <algorithm>
+#include <cstring>
 #include <mutex>
 #include <new>
 #include <stdexcept>
@@ -84,13 +85,16 @@ ComplexBuffer& ComplexBuffer::operator=(ComplexBuffer&& other) noexcept {
 }
 
 // One pass (rows or columns) is a set of equal batches of 1-D transforms plus at most one shorter
-// remainder batch; each batch has its own forward and inverse plan.
+// remainder batch; each batch has its own forward and inverse plan. Row plans run in place on the array;
+// column plans run on a contiguous block of `batch` interleaved columns (stride batch, distance 1).
 struct BatchPass {
     int count = 0;        // transforms in this pass (ny rows or nx columns)
     int batch = 0;        // transforms per batch
-    std::ptrdiff_t batch_offset = 0;   // elements between the starts of consecutive batches
     fftwf_plan full[2] = {nullptr, nullptr};   // [0] forward, [1] inverse
     fftwf_plan tail[2] = {nullptr, nullptr};
+    int batches() const { return (count + batch - 1) / batch; }
+    int width(int b) const { return std::min(batch, count - b * batch); }
+    fftwf_plan plan(int b, int s) const { return width(b) == batch ? full[s] : tail[s]; }
 };
 
 struct Fft2D::Plans {
@@ -99,6 +103,8 @@ struct Fft2D::Plans {
 };
 
 namespace {
+
+constexpr int kColumnBatch = 16;   // 128 bytes of each row per column block
 
 // Plans `howmany` 1-D transforms of length n with the given stride/distance on `scratch`.
 fftwf_plan plan_batch(int n, int howmany, int stride, int dist, ComplexF* scratch, int sign, unsigned flags) {
@@ -112,6 +118,18 @@ fftwf_plan plan_batch(int n, int howmany, int stride, int dist, ComplexF* scratc
 void destroy(fftwf_plan& p) {
     if (p != nullptr) fftwf_destroy_plan(p);
     p = nullptr;
+}
+
+// Copies `count` pieces of `width` values between strides; full-width pieces are a fixed-size copy the
+// compiler inlines (a library call per 128-byte piece costs as much as the copy).
+void copy_pieces(const ComplexF* src, std::size_t src_stride, ComplexF* dst, std::size_t dst_stride, int count,
+                 int width) {
+    if (width == kColumnBatch) {
+        for (int y = 0; y < count; ++y)
+            std::memcpy(dst + y * dst_stride, src + y * src_stride, kColumnBatch * sizeof(ComplexF));
+        return;
+    }
+    for (int y = 0; y < count; ++y) std::copy_n(src + y * src_stride, width, dst + y * dst_stride);
 }
 
 }  // namespace
@@ -138,23 +156,22 @@ Fft2D::Fft2D(int nx, int ny, FftRigor rigor) : nx_(nx), ny_(ny), plans_(std::mak
         p.count = ny;
         p.batch = std::max(unit, (ny / 32 + unit - 1) / unit * unit);
         p.batch = std::min(p.batch, ny);
-        p.batch_offset = static_cast<std::ptrdiff_t>(p.batch) * nx;
         for (int s = 0; s < 2; ++s) {
             const int sign = s == 0 ? FFTW_FORWARD : FFTW_BACKWARD;
             p.full[s] = plan_batch(nx, p.batch, 1, nx, scratch.data(), sign, flags);
             if (ny % p.batch != 0) p.tail[s] = plan_batch(nx, ny % p.batch, 1, nx, scratch.data(), sign, flags);
         }
     }
-    // Columns: batches of adjacent columns (stride nx); batch starts are multiples of kAlignComplex.
+    // Columns: blocks of up to kColumnBatch interleaved columns.
     {
         BatchPass& p = plans_->cols;
         p.count = nx;
-        p.batch = std::min(nx, 16);
-        p.batch_offset = p.batch;
+        p.batch = std::min(nx, kColumnBatch);
+        const int rest = nx % p.batch;
         for (int s = 0; s < 2; ++s) {
             const int sign = s == 0 ? FFTW_FORWARD : FFTW_BACKWARD;
-            p.full[s] = plan_batch(ny, p.batch, nx, 1, scratch.data(), sign, flags);
-            if (nx % p.batch != 0) p.tail[s] = plan_batch(ny, nx % p.batch, nx, 1, scratch.data(), sign, flags);
+            p.full[s] = plan_batch(ny, p.batch, p.batch, 1, scratch.data(), sign, flags);
+            if (rest != 0) p.tail[s] = plan_batch(ny, rest, rest, 1, scratch.data(), sign, flags);
         }
     }
 }
@@ -170,29 +187,70 @@ Fft2D::~Fft2D() {
     }
 }
 
-void Fft2D::forward(ComplexF* data) const { execute(data, true); }
-void Fft2D::inverse(ComplexF* data) const { execute(data, false); }
+void Fft2D::forward(ComplexF* data) const { forward_fused(data, {}); }
+void Fft2D::inverse(ComplexF* data) const { inverse_fused(data, {}, {}); }
 
-void Fft2D::execute(ComplexF* data, bool forward) const {
-    if (fftwf_alignment_of(reinterpret_cast<float*>(data)) != 0)
+void Fft2D::check_aligned(const ComplexF* data) const {
+    if (fftwf_alignment_of(reinterpret_cast<float*>(const_cast<ComplexF*>(data))) != 0)
         throw std::invalid_argument("Fft2D: data must be allocated by ComplexBuffer (SIMD-aligned)");
-    const int s = forward ? 0 : 1;
-    if (plans_->whole[s] != nullptr) {
-        fftwf_execute_dft(plans_->whole[s], as_fftw(data), as_fftw(data));
+}
+
+void Fft2D::forward_fused(ComplexF* data, const RowHook& fill_rows) const {
+    check_aligned(data);
+    if (plans_->whole[0] != nullptr) {
+        if (fill_rows) fill_rows(0, ny_, data);
+        fftwf_execute_dft(plans_->whole[0], as_fftw(data), as_fftw(data));
         return;
     }
-    auto run_pass = [&](const BatchPass& p) {
-        const int batches = (p.count + p.batch - 1) / p.batch;
-        tbb::parallel_for(tbb::blocked_range<int>(0, batches, 1), [&](const tbb::blocked_range<int>& r) {
-            for (int b = r.begin(); b < r.end(); ++b) {
-                ComplexF* start = data + static_cast<std::ptrdiff_t>(b) * p.batch_offset;
-                const bool tail = (b + 1) * p.batch > p.count;
-                fftwf_execute_dft(tail ? p.tail[s] : p.full[s], as_fftw(start), as_fftw(start));
+    row_pass(data, 0, fill_rows);
+    column_pass(data, 0, {});
+}
+
+void Fft2D::inverse_fused(ComplexF* data, const RowHook& fill_rows, const ColumnHook& consume_columns) const {
+    check_aligned(data);
+    if (plans_->whole[1] != nullptr) {
+        if (fill_rows) fill_rows(0, ny_, data);
+        fftwf_execute_dft(plans_->whole[1], as_fftw(data), as_fftw(data));
+        if (consume_columns) {
+            ComplexBuffer block(static_cast<std::size_t>(ny_) * kColumnBatch);
+            for (int x0 = 0; x0 < nx_; x0 += kColumnBatch) {
+                const int width = std::min(kColumnBatch, nx_ - x0);
+                copy_pieces(data + x0, nx_, block.data(), width, ny_, width);
+                consume_columns(x0, width, block.data());
             }
-        });
-    };
-    run_pass(plans_->rows);
-    run_pass(plans_->cols);
+        }
+        return;
+    }
+    row_pass(data, 1, fill_rows);
+    column_pass(data, 1, consume_columns);
+}
+
+void Fft2D::row_pass(ComplexF* data, int s, const RowHook& fill) const {
+    const BatchPass& p = plans_->rows;
+    tbb::parallel_for(tbb::blocked_range<int>(0, p.batches(), 1), [&](const tbb::blocked_range<int>& r) {
+        for (int b = r.begin(); b < r.end(); ++b) {
+            const int y0 = b * p.batch, y1 = y0 + p.width(b);
+            ComplexF* start = data + static_cast<std::size_t>(y0) * nx_;
+            if (fill) fill(y0, y1, start);
+            fftwf_execute_dft(p.plan(b, s), as_fftw(start), as_fftw(start));
+        }
+    });
+}
+
+void Fft2D::column_pass(ComplexF* data, int s, const ColumnHook& consume) const {
+    const BatchPass& p = plans_->cols;
+    tbb::parallel_for(tbb::blocked_range<int>(0, p.batches(), 1), [&](const tbb::blocked_range<int>& r) {
+        ComplexBuffer block(static_cast<std::size_t>(ny_) * p.batch);   // one per task: ~128 KB at 1024
+        for (int b = r.begin(); b < r.end(); ++b) {
+            const int x0 = b * p.batch, width = p.width(b);
+            copy_pieces(data + x0, nx_, block.data(), width, ny_, width);
+            fftwf_execute_dft(p.plan(b, s), as_fftw(block.data()), as_fftw(block.data()));
+            if (consume)
+                consume(x0, width, block.data());
+            else
+                copy_pieces(block.data(), width, data + x0, nx_, ny_, width);
+        }
+    });
 }
 
 }  // namespace caustics

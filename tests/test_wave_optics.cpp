@@ -1,4 +1,4 @@
-// Tests of the wave_optics method (issue 5 item 1) and the FFTW wrapper it uses.
+// Tests of the wave_optics method (Stam 1996): propagators, the surface table and the plugin.
 #include <cmath>
 #include <cstdio>
 #include <complex>
@@ -11,11 +11,13 @@
 
 #include <gtest/gtest.h>
 
+#include "../methods/wave_optics/wave_field_table.hpp"
 #include "../methods/wave_optics/wave_propagator.hpp"
 #include "errors.hpp"
 #include "fft.hpp"
 #include "frame.hpp"
 #include "metrics.hpp"
+#include "naive_dft.hpp"
 #include "ray_tracer.hpp"
 #include "receiver_chart.hpp"
 #include "reference.hpp"
@@ -26,82 +28,13 @@
 namespace caustics {
 namespace {
 
+using test_support::naive_dft;
 using wave_optics::IntensityTarget;
 using wave_optics::Propagator;
 using wave_optics::PropagationStats;
 using wave_optics::WavePropagator;
 using wave_optics::WaveSetup;
 constexpr double kPi = std::numbers::pi;
-
-// ---------------------------------------------------------------------------------------------------
-// FFT wrapper
-
-TEST(Fft, FastSizes) {
-    EXPECT_TRUE(is_fast_fft_size(1024));
-    EXPECT_TRUE(is_fast_fft_size(1000));
-    EXPECT_TRUE(is_fast_fft_size(2 * 3 * 5 * 7 * 7));
-    EXPECT_FALSE(is_fast_fft_size(1031));
-    EXPECT_FALSE(is_fast_fft_size(22));
-    EXPECT_EQ(next_fast_fft_size(1025), 1029);
-    EXPECT_EQ(next_fast_fft_size(11), 12);
-    const std::vector<int> s = fast_fft_sizes(10, 16);
-    EXPECT_EQ(s, (std::vector<int>{10, 12, 14, 15, 16}));
-}
-
-// Naive separable DFT in double: the independent check of both the serial and the batched paths.
-std::vector<std::complex<double>> naive_dft(const std::vector<std::complex<double>>& a, int nx, int ny, int sign) {
-    std::vector<std::complex<double>> rows(a.size()), out(a.size());
-    for (int y = 0; y < ny; ++y)
-        for (int k = 0; k < nx; ++k) {
-            std::complex<double> s = 0.0;
-            for (int x = 0; x < nx; ++x)
-                s += a[static_cast<std::size_t>(y) * nx + x] * std::polar(1.0, sign * 2.0 * kPi * k * x / nx);
-            rows[static_cast<std::size_t>(y) * nx + k] = s;
-        }
-    for (int x = 0; x < nx; ++x)
-        for (int k = 0; k < ny; ++k) {
-            std::complex<double> s = 0.0;
-            for (int y = 0; y < ny; ++y)
-                s += rows[static_cast<std::size_t>(y) * nx + x] * std::polar(1.0, sign * 2.0 * kPi * k * y / ny);
-            out[static_cast<std::size_t>(k) * nx + x] = s;
-        }
-    return out;
-}
-
-class FftSizes : public ::testing::TestWithParam<std::pair<int, int>> {};
-
-TEST_P(FftSizes, MatchesNaiveDftBothWays) {
-    const auto [nx, ny] = GetParam();
-    std::mt19937 rng(7);
-    std::normal_distribution<double> g;
-    std::vector<std::complex<double>> a(static_cast<std::size_t>(nx) * ny);
-    ComplexBuffer buf(a.size());
-    for (std::size_t k = 0; k < a.size(); ++k) {
-        a[k] = {g(rng), g(rng)};
-        buf[k] = ComplexF(static_cast<float>(a[k].real()), static_cast<float>(a[k].imag()));
-        a[k] = {buf[k].real(), buf[k].imag()};
-    }
-    Fft2D fft(nx, ny, FftRigor::Estimate);
-    fft.forward(buf.data());
-    const auto expect = naive_dft(a, nx, ny, -1);
-    double err = 0.0, norm = 0.0;
-    for (std::size_t k = 0; k < a.size(); ++k) {
-        err = std::max(err, std::abs(std::complex<double>(buf[k].real(), buf[k].imag()) - expect[k]));
-        norm = std::max(norm, std::abs(expect[k]));
-    }
-    EXPECT_LT(err / norm, 1e-5);
-    fft.inverse(buf.data());
-    double back = 0.0;
-    for (std::size_t k = 0; k < a.size(); ++k)
-        back = std::max(back, std::abs(std::complex<double>(buf[k].real(), buf[k].imag()) / double(a.size()) - a[k]));
-    EXPECT_LT(back, 1e-5);
-}
-
-// 24 x 20: one serial 2-D plan; 160 x 128 and 135 x 125: batched rows and columns, odd sizes with
-// tail batches.
-INSTANTIATE_TEST_SUITE_P(Sizes, FftSizes,
-                         ::testing::Values(std::make_pair(24, 20), std::make_pair(160, 128),
-                                           std::make_pair(135, 125)));
 
 // ---------------------------------------------------------------------------------------------------
 // Propagator
@@ -249,6 +182,70 @@ TEST(WavePropagator, TalbotSelfImagingWithFresnel) {
     }
 }
 
+TEST(WavePropagator, CachedTransferFunctionsMatchAFreshPropagator) {
+    // Depth changes back and forth: the second propagation to z1 uses the cached transfer function and
+    // must give exactly what a new propagator (nothing cached) computes; a changed parameter (the
+    // wavelength) builds a new propagator and a different result.
+    const int n = 128;
+    WaveSetup s;
+    s.nx = s.ny = n;
+    s.lx = s.ly = 2.0;
+    s.wavelength = 2.0 * s.lx / n;
+    s.carrier_bins = {3, -1};
+    const std::vector<float> h = random_surface(n, 3, 5);
+    auto intensity = [&](WavePropagator& p, double z) {
+        std::vector<float> I(static_cast<std::size_t>(n) * n);
+        IntensityTarget t{I.data(), 1.0f, true};
+        p.propagate(z, &t, 1);
+        return I;
+    };
+    WavePropagator p(s, FftRigor::Estimate);
+    p.set_phase_screen(h.data(), 40.0f);
+    const std::vector<float> first = intensity(p, 0.3);
+    const std::vector<float> other = intensity(p, 0.5);
+    const std::vector<float> again = intensity(p, 0.3);
+    WavePropagator fresh(s, FftRigor::Estimate);
+    fresh.set_phase_screen(h.data(), 40.0f);
+    EXPECT_EQ(again, first);
+    EXPECT_EQ(intensity(fresh, 0.3), first);
+    EXPECT_EQ(intensity(fresh, 0.5), other);
+    EXPECT_NE(first, other);
+    s.wavelength *= 1.5;
+    WavePropagator longer(s, FftRigor::Estimate);
+    longer.set_phase_screen(h.data(), 40.0f);
+    EXPECT_NE(intensity(longer, 0.3), first);
+}
+
+// A surface of grid (or a multiple of grid) cells puts every grid sample on a vertex: the copy path
+// must equal the bilinear path bit for bit, tapered (edges that do not match) or not.
+TEST(WaveFieldTable, OnVertexCopyEqualsBilinearResampling) {
+    using wave_optics::WaveFieldTable;
+    for (int step : {1, 2}) {
+        for (bool periodic : {true, false}) {
+            const int grid = 64, vertices = grid * step + 1;
+            HeightField hf;
+            hf.nx = hf.ny = vertices;
+            hf.spacing = glm::dvec2(2.0 / (vertices - 1));
+            hf.periodic = periodic;
+            std::mt19937 rng(step * 2 + periodic);
+            std::normal_distribution<float> g;
+            hf.height.resize(static_cast<std::size_t>(vertices) * vertices);
+            for (float& v : hf.height) v = 0.3f + 0.01f * g(rng);
+            WaveFieldTable copy(grid, grid, false), bilinear(grid, grid, false);
+            const auto& a = copy.resample(hf, 2.0, 2.0, WaveFieldTable::ResamplePath::Auto);
+            const auto& b = bilinear.resample(hf, 2.0, 2.0, WaveFieldTable::ResamplePath::Bilinear);
+            EXPECT_EQ(a.periodic, periodic);
+            EXPECT_EQ(a.level, b.level);
+            EXPECT_EQ(a.height, b.height) << "step " << step << " periodic " << periodic;
+            // The copy really is the vertex grid: sample (i, j) is vertex (i step, j step), less the level.
+            if (periodic) {
+                EXPECT_EQ(a.height[5 * grid + 7], static_cast<float>(hf.z(7 * step, 5 * step) - static_cast<float>(a.level)))
+                    << "step " << step;
+            }
+        }
+    }
+}
+
 // ---------------------------------------------------------------------------------------------------
 // The method on scenes
 
@@ -357,6 +354,31 @@ TEST(WaveOptics, DepthSlicesMatchSingleDepthRenders) {
         }
     }
     EXPECT_EQ(slices.health.get("depth_mismatch"), 0);
+}
+
+TEST(WaveOptics, RepeatedFramesAndNewScenesMatchFreshMethods) {
+    // Transfer functions are kept across frames; they depend on the parameters and depths only. A
+    // repeated frame (cached) and a method prepared again on a changed scene (oblique light, another
+    // receiver depth) must give exactly what new methods give.
+    const Scene first = water_scene(HeightGenerator::Sine, 0.01, -0.4, {0, 0, -1}, 32, 1.0);
+    const Scene second = water_scene(HeightGenerator::Sine, 0.01, -0.3, {0.2, 0.1, -1}, 32, 1.0);
+    const std::map<std::string, std::string> params{{"grid", "256"}};
+    auto render = [](Method& m, const Scene& scene) {
+        m.prepare(scene);
+        FrameGeometry frame = build_frame_geometry(scene, 0);
+        ReceiverChart chart(frame, scene.receiver.width, scene.receiver.height);
+        RenderRequest req;
+        req.receiver = &chart;
+        m.update(frame);
+        return m.render(frame, req).receiver.pixels;
+    };
+    auto reused = make_method(params);
+    const std::vector<float> a1 = render(*reused, first);
+    const std::vector<float> a2 = render(*reused, first);
+    const std::vector<float> b = render(*reused, second);
+    EXPECT_EQ(a2, a1);
+    EXPECT_EQ(b, render(*make_method(params), second));
+    EXPECT_NE(b, a1);
 }
 
 TEST(WaveOptics, BadInputIsRefused) {

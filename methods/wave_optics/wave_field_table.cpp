@@ -4,9 +4,11 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <utility>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 namespace caustics::wave_optics {
 
@@ -31,13 +33,20 @@ WaveFieldTable::WaveFieldTable(int nx, int ny, bool rgb) : nx_(nx), ny_(ny), rgb
     surface_.height.assign(static_cast<std::size_t>(nx) * ny, 0.0f);
 }
 
-const SurfaceSamples& WaveFieldTable::resample(const HeightField& hf, double lx, double ly) {
+const SurfaceSamples& WaveFieldTable::resample(const HeightField& hf, double lx, double ly, ResamplePath path) {
     // Periodicity: flagged by the generator, or opposite edges equal to within 1e-3 of the height range.
-    float hmin = hf.height.empty() ? 0.0f : hf.height.front(), hmax = hmin;
-    for (float h : hf.height) {
-        hmin = std::min(hmin, h);
-        hmax = std::max(hmax, h);
-    }
+    using Range = std::pair<float, float>;
+    const float h0 = hf.height.empty() ? 0.0f : hf.height.front();
+    const auto [hmin, hmax] = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, hf.height.size(), 1 << 15), Range(h0, h0),
+        [&](const tbb::blocked_range<std::size_t>& r, Range m) {
+            for (std::size_t k = r.begin(); k < r.end(); ++k) {
+                m.first = std::min(m.first, hf.height[k]);
+                m.second = std::max(m.second, hf.height[k]);
+            }
+            return m;
+        },
+        [](const Range& a, const Range& b) { return Range(std::min(a.first, b.first), std::max(a.second, b.second)); });
     double mismatch = 0.0, edge_sum = 0.0;
     std::size_t edge_count = 0;
     for (int j = 0; j < hf.ny; ++j) {
@@ -78,6 +87,11 @@ const SurfaceSamples& WaveFieldTable::resample(const HeightField& hf, double lx,
     const int step_y = hf.ny > 1 ? 1 : 0;
     const float e = static_cast<float>(edge_mean);
     const bool taper = !surface_.periodic;
+    // On-vertex samples: g = i (vertices - 1) / N is an integer, so f = 0 and the blend returns the
+    // vertex exactly (x + 0 * y = x for finite heights).
+    const bool on_vertices = path == ResamplePath::Auto && hf.nx > 1 && hf.ny > 1 &&
+                             (hf.nx - 1) % nx_ == 0 && (hf.ny - 1) % ny_ == 0;
+    const int vertex_step_x = on_vertices ? (hf.nx - 1) / nx_ : 0;
     std::vector<double> row_sum(static_cast<std::size_t>(ny_), 0.0);
     float* out = surface_.height.data();
     tbb::parallel_for(tbb::blocked_range<int>(0, ny_, 8), [&](const tbb::blocked_range<int>& r) {
@@ -88,6 +102,16 @@ const SurfaceSamples& WaveFieldTable::resample(const HeightField& hf, double lx,
             const float b = fy[ju];
             float* dst = out + ju * nx_;
             double sum = 0.0;
+            if (on_vertices) {
+                for (int i = 0; i < nx_; ++i) {
+                    float h = row0[static_cast<std::size_t>(i) * vertex_step_x];
+                    if (taper) h = e + wx[static_cast<std::size_t>(i)] * wy[ju] * (h - e);
+                    dst[i] = h;
+                    sum += h;
+                }
+                row_sum[ju] = sum;
+                continue;
+            }
             for (int i = 0; i < nx_; ++i) {
                 const std::size_t iu = static_cast<std::size_t>(i);
                 const int a = i0[iu];

@@ -49,7 +49,12 @@ public:
     // Resamples `hf` (bilinear) to the grid over its rectangle lx x ly. Surfaces flagged periodic, or
     // whose opposite edges match to 1e-3 of their height range, are used as they are; others are
     // tapered to their edge mean over a raised-cosine border band of 1/16 of the period.
-    const SurfaceSamples& resample(const HeightField& hf, double lx, double ly);
+    // Where every grid sample falls on a vertex ((vertices - 1) a multiple of the grid along both axes,
+    // e.g. a 1024-cell surface on grid 1024 or 512), the bilinear weights are exactly 0 and the samples
+    // are copied (ResamplePath::Auto); the result is bit-identical to the bilinear path.
+    enum class ResamplePath { Auto, Bilinear };
+    const SurfaceSamples& resample(const HeightField& hf, double lx, double ly,
+                                   ResamplePath path = ResamplePath::Auto);
 
     // Sizes the table for `slices` depths (contents undefined until the first sample assigns them).
     void begin(int slices);

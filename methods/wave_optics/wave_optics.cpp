@@ -262,6 +262,8 @@ private:
     glm::dvec3 refracted_{0.0, 0.0, -1.0};
     std::vector<Spectral> spectral_;
     std::unique_ptr<WaveFieldTable> table_;
+    std::vector<ShadePoint> points_;   // per-frame scratch of render()
+    std::vector<glm::vec4> values_;
 };
 
 bool WaveOpticsMethod::find_setup(const Scene& scene, std::string& why) const {
@@ -366,7 +368,7 @@ CausticOutput WaveOpticsMethod::render(const FrameGeometry& frame, const RenderR
     };
     const HeightField& hf = *frame.objects.at(static_cast<std::size_t>(water_index_)).heightfield;
     // 1. The surface on the FFT grid, periodic (tapered if its edges do not match), mean level removed.
-    const SurfaceSamples surface = table_->resample(hf, lx_, ly_);
+    const SurfaceSamples& surface = table_->resample(hf, lx_, ly_);
     if (!surface.periodic) out.health.add("nonperiodic_surface", 1);
     out.stages_ms.emplace_back("resample", lap());
 
@@ -388,16 +390,21 @@ CausticOutput WaveOpticsMethod::render(const FrameGeometry& frame, const RenderR
         if (request.receiver == nullptr && request.camera == nullptr) return out;
     }
 
-    // 2. The points to shade: receiver bin centres and covered camera pixels.
-    std::vector<ShadePoint> points;
+    // 2. The points to shade: receiver bin centres and covered camera pixels (the buffers are kept
+    // between frames only to spare their allocation; every element is written below).
+    std::vector<ShadePoint>& points = points_;
+    points.clear();
     const ReceiverChart* chart = request.receiver;
     if (chart != nullptr) {
-        points.reserve(static_cast<std::size_t>(chart->width()) * chart->height());
-        for (int j = 0; j < chart->height(); ++j)
-            for (int i = 0; i < chart->width(); ++i) {
-                const double s = (i + 0.5) / chart->width(), t = (j + 0.5) / chart->height();
-                points.push_back({chart->point(s, t), chart->normal(s, t)});
-            }
+        const int width = chart->width(), height = chart->height();
+        points.resize(static_cast<std::size_t>(width) * height);
+        tbb::parallel_for(tbb::blocked_range<int>(0, height, 8), [&](const tbb::blocked_range<int>& r) {
+            for (int j = r.begin(); j < r.end(); ++j)
+                for (int i = 0; i < width; ++i) {
+                    const double s = (i + 0.5) / width, t = (j + 0.5) / height;
+                    points[static_cast<std::size_t>(j) * width + i] = {chart->point(s, t), chart->normal(s, t)};
+                }
+        });
     }
     const std::size_t receiver_points = points.size();
     const CameraGBuffer* gb = request.camera;
@@ -435,7 +442,8 @@ CausticOutput WaveOpticsMethod::render(const FrameGeometry& frame, const RenderR
 
     // 5. Look the intensity up at every point, scaled to irradiance.
     const LookupGeometry geo = lookup_geometry(hf, surface, depths);
-    std::vector<glm::vec4> values(points.size());
+    std::vector<glm::vec4>& values = values_;
+    values.resize(points.size());   // lookup() writes every element
     LookupCounters counters;
     table_->lookup(geo, points, values, counters);
     out.health.add("not_covered", counters.not_covered);

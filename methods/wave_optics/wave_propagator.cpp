@@ -25,6 +25,27 @@ double ordered_sum(const std::vector<double>& v) {
     return s;
 }
 
+// Energy sum_k |u_k|^2 of one row and of its evanescent bins (mask 1), in four interleaved partial sums
+// (independent dependency chains: a single running double sum is latency-bound), combined in a fixed
+// order.
+void row_energy(const ComplexF* u, const std::uint8_t* evanescent, int n, double& total, double& lost) {
+    double t[4] = {0.0, 0.0, 0.0, 0.0}, l[4] = {0.0, 0.0, 0.0, 0.0};
+    int i = 0;
+    for (; i + 4 <= n; i += 4)
+        for (int j = 0; j < 4; ++j) {
+            const double e = std::norm(u[i + j]);
+            t[j] += e;
+            l[j] += evanescent[i + j] != 0 ? e : 0.0;
+        }
+    for (; i < n; ++i) {
+        const double e = std::norm(u[i]);
+        t[0] += e;
+        l[0] += evanescent[i] != 0 ? e : 0.0;
+    }
+    total = (t[0] + t[1]) + (t[2] + t[3]);
+    lost = (l[0] + l[1]) + (l[2] + l[3]);
+}
+
 }  // namespace
 
 WavePropagator::WavePropagator(const WaveSetup& setup, FftRigor rigor)
@@ -50,6 +71,7 @@ WavePropagator::WavePropagator(const WaveSetup& setup, FftRigor rigor)
     const double kzc = as ? std::sqrt(k2 - glm::dot(fc, fc)) : 0.0;
     rate_.assign(static_cast<std::size_t>(nx) * ny, 0.0);
     limit_.assign(static_cast<std::size_t>(nx) * ny, 0.0);
+    evanescent_.assign(static_cast<std::size_t>(nx) * ny, 0);
     const double half_lx = 0.5 * setup.lx, half_ly = 0.5 * setup.ly;
     tbb::parallel_for(0, ny, [&](int iy) {
         const double fy = signed_index(iy, ny) / setup.ly;
@@ -66,6 +88,7 @@ WavePropagator::WavePropagator(const WaveSetup& setup, FftRigor rigor)
             const double kz2 = k2 - (tx * tx + ty * ty);
             if (!(kz2 > 0.0)) {
                 limit_[k] = -1.0;   // evanescent
+                evanescent_[k] = 1;
                 continue;
             }
             const double kz = std::sqrt(kz2);
@@ -84,36 +107,40 @@ glm::dvec3 WavePropagator::carrier_direction() const {
 
 std::int64_t WavePropagator::set_phase_screen(const float* height, float phase_scale) {
     const int nx = setup_.nx, ny = setup_.ny;
+    spectrum_sums_.reset();
     std::vector<std::int64_t> aliased(static_cast<std::size_t>(ny), 0);
-    ComplexF* u = spectrum_.data();
-    tbb::parallel_for(tbb::blocked_range<int>(0, ny, 8), [&](const tbb::blocked_range<int>& r) {
-        for (int iy = r.begin(); iy < r.end(); ++iy) {
+    // |a h_i - a h_j| > pi  <=>  |h_i - h_j| > pi / |a|.
+    const float limit = std::numbers::pi_v<float> / std::max(std::abs(phase_scale), 1e-30f);
+    // Each batch of rows is filled just before its row transforms run, while it is still in cache.
+    fft_.forward_fused(spectrum_.data(), [&](int y0, int y1, ComplexF* rows) {
+        for (int iy = y0; iy < y1; ++iy) {
             const float* h = height + static_cast<std::size_t>(iy) * nx;
             const float* h_next = height + static_cast<std::size_t>((iy + 1) % ny) * nx;
-            ComplexF* row = u + static_cast<std::size_t>(iy) * nx;
-            std::int64_t count = 0;
+            float* row = reinterpret_cast<float*>(rows + static_cast<std::size_t>(iy - y0) * nx);
             for (int ix = 0; ix < nx; ++ix) {
                 float s, c;
                 fast_sincos(phase_scale * h[ix], s, c);
-                row[ix] = ComplexF(c, s);
+                row[2 * ix] = c;
+                row[2 * ix + 1] = s;
             }
-            // Phase steps to the next cell in x (periodic) and y; |a h_i - a h_j| = |a (h_i - h_j)|.
-            const float limit = std::numbers::pi_v<float> / std::max(std::abs(phase_scale), 1e-30f);
-            for (int ix = 0; ix < nx; ++ix) {
-                const float right = ix + 1 < nx ? h[ix + 1] : h[0];
-                const bool big = std::abs(right - h[ix]) > limit || std::abs(h_next[ix] - h[ix]) > limit;
-                count += big ? 1 : 0;
-            }
+            // Phase steps to the next cell in x (periodic) and y.
+            int count = 0;
+            for (int ix = 0; ix + 1 < nx; ++ix)
+                count += static_cast<int>(std::abs(h[ix + 1] - h[ix]) > limit) |
+                         static_cast<int>(std::abs(h_next[ix] - h[ix]) > limit);
+            const int last = nx - 1;
+            count += static_cast<int>(std::abs(h[0] - h[last]) > limit) |
+                     static_cast<int>(std::abs(h_next[last] - h[last]) > limit);
             aliased[static_cast<std::size_t>(iy)] = count;
         }
     });
-    fft_.forward(u);
     std::int64_t total = 0;
     for (std::int64_t c : aliased) total += c;
     return total;
 }
 
 void WavePropagator::set_field(const ComplexF* field) {
+    spectrum_sums_.reset();
     std::copy(field, field + spectrum_.size(), spectrum_.data());
     fft_.forward(spectrum_.data());
 }
@@ -177,41 +204,52 @@ PropagationStats WavePropagator::propagate(double depth, const IntensityTarget* 
     const ComplexF* U = spectrum_.data();
     ComplexF* W = work_.data();
     const ComplexF* cached = transfer(depth);
-    const ComplexF* H = cached != nullptr ? cached : W;   // uncached: H already sits in W
-    tbb::parallel_for(tbb::blocked_range<int>(0, ny, 8), [&](const tbb::blocked_range<int>& r) {
-        for (int iy = r.begin(); iy < r.end(); ++iy) {
+    // Uncached, H already sits in W: each batch of rows reads its own rows of H before replacing them.
+    const ComplexF* H = cached != nullptr ? cached : W;
+    // U H is formed batch by batch of rows just before their inverse transforms (no separate pass over
+    // a product array), and |u|^2 is taken from each batch of columns as soon as its transform is done
+    // (the field itself is never stored). The total and evanescent energies depend on the spectrum
+    // only: summed with the first depth after each new spectrum (per row, then rows in order, so they
+    // do not depend on the thread count) and reused for the other depths; only the band-limited energy
+    // depends on the depth.
+    const bool sum_spectrum = !spectrum_sums_.has_value();
+    auto fill = [&](int y0, int y1, ComplexF* rows) {
+        for (int iy = y0; iy < y1; ++iy) {
             double sum = 0.0, ev = 0.0, bl = 0.0;
             const std::size_t row = static_cast<std::size_t>(iy) * nx;
+            ComplexF* dst = rows + static_cast<std::size_t>(iy - y0) * nx;
+            if (sum_spectrum) row_energy(U + row, evanescent_.data() + row, nx, sum, ev);
             for (int ix = 0; ix < nx; ++ix) {
                 const std::size_t k = row + ix;
-                const double e = std::norm(U[k]);
-                sum += e;
                 const float hr = H[k].real(), hi = H[k].imag();
-                if (hr == 0.0f && hi == 0.0f) (limit_[k] < 0.0 ? ev : bl) += e;
                 const float ur = U[k].real(), ui = U[k].imag();
-                W[k] = ComplexF(ur * hr - ui * hi, ur * hi + ui * hr);   // no NaN-checking complex multiply
+                if (hr == 0.0f && hi == 0.0f && evanescent_[k] == 0) bl += static_cast<double>(std::norm(U[k]));
+                dst[ix] = ComplexF(ur * hr - ui * hi, ur * hi + ui * hr);   // no NaN-checking complex multiply
             }
             total[static_cast<std::size_t>(iy)] = sum;
             evanescent[static_cast<std::size_t>(iy)] = ev;
             limited[static_cast<std::size_t>(iy)] = bl;
         }
-    });
-    fft_.inverse(W);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, work_.size(), 4096),
-                      [&](const tbb::blocked_range<std::size_t>& r) {
+    };
+    auto consume = [&](int x0, int width, const ComplexF* block) {
         for (int t = 0; t < target_count; ++t) {
-            float* out = targets[t].out;
             const float w = targets[t].weight;
-            if (targets[t].assign) {
-                for (std::size_t k = r.begin(); k < r.end(); ++k) out[k] = w * std::norm(W[k]);
-            } else {
-                for (std::size_t k = r.begin(); k < r.end(); ++k) out[k] += w * std::norm(W[k]);
+            for (int iy = 0; iy < ny; ++iy) {
+                float* out = targets[t].out + static_cast<std::size_t>(iy) * nx + x0;
+                const ComplexF* u = block + static_cast<std::size_t>(iy) * width;
+                if (targets[t].assign) {
+                    for (int i = 0; i < width; ++i) out[i] = w * std::norm(u[i]);
+                } else {
+                    for (int i = 0; i < width; ++i) out[i] += w * std::norm(u[i]);
+                }
             }
         }
-    });
+    };
+    fft_.inverse_fused(W, fill, consume);
+    if (sum_spectrum) spectrum_sums_ = SpectrumSums{ordered_sum(total), ordered_sum(evanescent)};
     PropagationStats stats;
-    stats.total_energy = ordered_sum(total);
-    stats.evanescent_energy = ordered_sum(evanescent);
+    stats.total_energy = spectrum_sums_->total;
+    stats.evanescent_energy = spectrum_sums_->evanescent;
     stats.band_limited_energy = ordered_sum(limited);
     if (setup_.propagator == Propagator::Fresnel)
         stats.sampling_ok = fresnel_sampling_ok(depth);

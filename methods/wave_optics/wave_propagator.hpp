@@ -106,8 +106,16 @@ private:
     // negative for evanescent bins, 0 for the Fresnel propagator).
     std::vector<double> rate_;
     std::vector<double> limit_;
+    std::vector<std::uint8_t> evanescent_;   // 1 where limit_ < 0 (a compact copy for the per-depth pass)
+    // Energy of the current spectrum, total and evanescent (depth-independent); reset with each new field.
+    struct SpectrumSums {
+        double total = 0.0, evanescent = 0.0;
+    };
+    std::optional<SpectrumSums> spectrum_sums_;
     // Transfer functions of recent depths (normalised by 1 / (nx ny)), so that repeated frames at the
     // same receiver depths only multiply: at most kCacheBytes per propagator, else computed per call.
+    // Keeping them across frames is exact: H depends only on the setup (fixed for the propagator's
+    // life; a parameter change builds a new propagator) and the depth (the key), never on the surface.
     static constexpr std::size_t kCacheBytes = std::size_t(256) << 20;
     std::vector<std::pair<double, ComplexBuffer>> cache_;
     const ComplexF* transfer(double depth);
