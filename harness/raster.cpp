@@ -47,11 +47,52 @@ inline std::int64_t floor_div(std::int64_t a, std::int64_t b) {
     return (a % b != 0 && ((a < 0) != (b < 0))) ? q - 1 : q;
 }
 
+inline Box bounding_box(glm::vec2 p0, glm::vec2 p1, glm::vec2 p2) {
+    return {std::min(std::min(p0.x, p1.x), p2.x), std::min(std::min(p0.y, p1.y), p2.y),
+            std::max(std::max(p0.x, p1.x), p2.x), std::max(std::max(p0.y, p1.y), p2.y)};
+}
+
+// Twice the signed area of a triangle (counter-clockwise positive), in double from its float vertices.
+inline double cross2(glm::vec2 p0, glm::vec2 p1, glm::vec2 p2) {
+    const glm::dvec2 e1 = glm::dvec2(p1) - glm::dvec2(p0), e2 = glm::dvec2(p2) - glm::dvec2(p0);
+    return e1.x * e2.y - e1.y * e2.x;
+}
+
+// Area coverage: a triangle whose box lies inside one pixel, or whose area is ~0 next to its size (it
+// would divide by ~0), is deposited as points; any other is drawn by its edges. `cross` = cross2(...).
+inline TriangleKind area_kind(const Box& b, double cross) {
+    // A box inside one pixel is at most 1 wide and high (in float too: rounding is monotonic), which
+    // spares the floors for nearly every triangle.
+    if (b.xmax - b.xmin <= 1.0f && b.ymax - b.ymin <= 1.0f) {
+        const double fx = std::floor(static_cast<double>(b.xmin));
+        const double fy = std::floor(static_cast<double>(b.ymin));
+        if (b.xmax <= fx + 1.0 && b.ymax <= fy + 1.0) return kOnePixel;
+    }
+    const double diag2 = double(b.xmax - b.xmin) * (b.xmax - b.xmin) + double(b.ymax - b.ymin) * (b.ymax - b.ymin);
+    return std::abs(cross) <= 2e-8 + 2e-10 * diag2 ? kDegenerate : kNormal;
+}
+
+// Coverage accumulates with the sign of -(signed area): the edge weight value / coverage. Wrap copies
+// are shifted by whole tiles, which leaves the (exact) differences unchanged.
+inline double area_weight(double cross, float value) { return -static_cast<double>(value) / (0.5 * cross); }
+
+inline bool finite_triangle(glm::vec2 p0, glm::vec2 p1, glm::vec2 p2, float value) {
+    return std::isfinite(value) && std::isfinite(p0.x) && std::isfinite(p0.y) && std::isfinite(p1.x) &&
+           std::isfinite(p1.y) && std::isfinite(p2.x) && std::isfinite(p2.y);
+}
+
+// Bands [lo, hi] that rows [ymin, ymax] of an image `height` rows high touch (hi < lo: none).
+glm::ivec2 band_span(double ymin, double ymax, int height) {
+    if (ymax < 0.0 || ymin >= height) return {1, 0};
+    return {static_cast<int>(std::max(ymin, 0.0)) / TriangleRaster::kBandRows,
+            static_cast<int>(std::min(ymax, height - 1.0)) / TriangleRaster::kBandRows};
+}
+
 }  // namespace
 
 struct TriangleRaster::Impl {
     std::vector<Box> boxes;
-    std::vector<std::uint8_t> kinds;
+    std::vector<TriangleKind> kinds;   // not a char type: its stores alias nothing else
     std::vector<glm::ivec2> band_range;   // without wrap: the bands of the single copy (pass 1 -> 2)
     std::vector<std::uint32_t> counts;    // [chunk][band]
     std::vector<std::uint32_t> cursors;   // [chunk][band] write positions
@@ -59,92 +100,49 @@ struct TriangleRaster::Impl {
     std::vector<BinEntry> entries;
     std::vector<RasterStats> chunk_stats;
     tbb::enumerable_thread_specific<std::vector<double>> band_acc;
-    // Structured-grid path (Area coverage, no wrap): see draw_grid_bins.
-    std::vector<double> tri_weight;          // per triangle: -value / signed area (0: draws no edges)
-    std::vector<std::uint8_t> chunk_grid;    // per chunk: its triangles follow the grid pattern
-    std::vector<double> edge_weight;         // per edge slot 3 v + type
-    std::vector<glm::ivec2> edge_band;       // per edge slot: band range (x > y: none)
-    std::vector<std::uint32_t> grid_entries; // (id << 2) | type; type 3: point-deposit triangle id
+    std::vector<double> tri_weight;       // Area, per triangle: -value / signed area (0: draws no edges)
+    // Structured-grid path (draw_grid): per [vertex-row chunk][band], the edges and point deposits in
+    // input order; the lists keep their capacity between calls.
+    struct GridEdge {
+        double weight;
+        std::uint32_t code;   // (vertex << 2) | edge type 0..2, or (triangle << 2) | 3: point deposit
+    };
+    std::vector<std::vector<GridEdge>> grid_lists;
+    std::vector<std::uint8_t> chunk_grid;   // per triangle chunk: its triangles follow the grid pattern
 
     int width = 0, height = 0, bands = 0;
     bool wrap = false;
 
-    // Grid path: edge slot 3 v + type joins vertex v to v + 1 (type 0), v + g (1), v + g + 1 (2), drawn
-    // in that direction with the weight of the triangle traversing it so minus the one traversing it
-    // backwards; point-deposit triangles are listed with type 3. Fills band_start and grid_entries in a
-    // fixed order (vertex rows in chunks of kGridChunkRows), whatever the thread count.
-    void bin_grid(std::span<const glm::vec2> pos, int g) {
-        const std::size_t nb = static_cast<std::size_t>(bands);
-        const int chunks = (g + kGridChunkRows - 1) / kGridChunkRows;
-        edge_weight.resize(3 * pos.size());
-        edge_band.resize(3 * pos.size());
-        counts.assign(static_cast<std::size_t>(chunks) * nb, 0u);
-        cursors.resize(counts.size());
-        const float fw = static_cast<float>(width), fh = static_cast<float>(height);
-        const int last_row = height - 1;
-        auto band_of = [&](float ya, float yb, glm::ivec2& r) {
-            const float lo = std::min(ya, yb), hi = std::max(ya, yb);
-            if (!(hi > 0.0f && lo < fh && lo != hi)) {
-                r = {1, 0};
-                return;
-            }
-            r.x = static_cast<int>(std::max(lo, 0.0f)) / kBandRows;
-            r.y = std::min(static_cast<int>(hi), last_row) / kBandRows;
-        };
-        tbb::parallel_for(0, chunks, [&](int c) {
-            std::uint32_t* count = counts.data() + static_cast<std::size_t>(c) * nb;
-            const int j1 = std::min(g, (c + 1) * kGridChunkRows);
-            for (int j = c * kGridChunkRows; j < j1; ++j) {
-                for (int i = 0; i < g; ++i) {
-                    const std::size_t v = static_cast<std::size_t>(j) * g + i;
-                    const std::size_t tA = 2 * (static_cast<std::size_t>(j) * (g - 1) + i), tB = tA + 1;
-                    const std::size_t left = tA - 2, below = tA - 2 * static_cast<std::size_t>(g - 1) + 1;
-                    const bool in_i = i + 1 < g, in_j = j + 1 < g;
-                    double w[3];
-                    w[0] = in_i ? (in_j ? tri_weight[tA] : 0.0) - (j > 0 ? tri_weight[below] : 0.0) : 0.0;
-                    w[1] = in_j ? (i > 0 ? tri_weight[left] : 0.0) - (in_i ? tri_weight[tB] : 0.0) : 0.0;
-                    w[2] = in_i && in_j ? tri_weight[tB] - tri_weight[tA] : 0.0;
-                    const std::size_t other[3] = {v + 1, v + g, v + g + 1};
-                    for (int type = 0; type < 3; ++type) {
-                        glm::ivec2& r = edge_band[3 * v + type];
-                        edge_weight[3 * v + type] = w[type];
-                        r = {1, 0};
-                        if (w[type] == 0.0) continue;
-                        const glm::vec2 a = pos[v], b = pos[other[type]];
-                        if (std::min(a.x, b.x) >= fw) continue;   // deposits right of the image only
-                        band_of(a.y, b.y, r);
-                        for (int band = r.x; band <= r.y; ++band) ++count[band];
-                    }
-                    if (in_i && in_j)
-                        for (std::size_t t : {tA, tB})
-                            if (kinds[t] == kOnePixel || kinds[t] == kDegenerate)
-                                for (int band = band_range[t].x; band <= band_range[t].y; ++band) ++count[band];
-                }
-            }
-        });
-        grid_entries.resize(band_offsets(counts, static_cast<std::size_t>(chunks), nb, cursors, band_start));
-        tbb::parallel_for(0, chunks, [&](int c) {
-            std::uint32_t* cursor = cursors.data() + static_cast<std::size_t>(c) * nb;
-            const int j1 = std::min(g, (c + 1) * kGridChunkRows);
-            for (int j = c * kGridChunkRows; j < j1; ++j) {
-                for (int i = 0; i < g; ++i) {
-                    const std::size_t v = static_cast<std::size_t>(j) * g + i;
-                    for (int type = 0; type < 3; ++type) {
-                        const glm::ivec2 r = edge_band[3 * v + type];
-                        const std::uint32_t code = static_cast<std::uint32_t>(v << 2) | static_cast<std::uint32_t>(type);
-                        for (int band = r.x; band <= r.y; ++band) grid_entries[cursor[band]++] = code;
-                    }
-                    if (i + 1 < g && j + 1 < g) {
-                        const std::size_t tA = 2 * (static_cast<std::size_t>(j) * (g - 1) + i);
-                        for (std::size_t t : {tA, tA + 1})
-                            if (kinds[t] == kOnePixel || kinds[t] == kDegenerate)
-                                for (int band = band_range[t].x; band <= band_range[t].y; ++band)
-                                    grid_entries[cursor[band]++] = static_cast<std::uint32_t>(t << 2) | 3u;
-                    }
-                }
-            }
-        });
+    double* band_accumulator(std::size_t stride) {
+        std::vector<double>& acc = band_acc.local();
+        if (acc.size() < stride * kBandRows) acc.assign(stride * kBandRows, 0.0);
+        return acc.data();
     }
+
+    // Whether the triangles are those of a g x g vertex grid, cells (i, j) split into {v00, v10, v11},
+    // {v00, v11, v01} in row order (the surface grids of caustic_triangles).
+    bool is_grid(std::span<const glm::uvec3> tris, unsigned g) {
+        const std::size_t chunks = (tris.size() + kChunk - 1) / kChunk;
+        chunk_grid.assign(chunks, 0);
+        tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {   // chunks start on even triangles
+            const std::size_t end = std::min(tris.size(), (c + 1) * kChunk);
+            const std::size_t cell0 = c * kChunk / 2;
+            unsigned i = static_cast<unsigned>(cell0 % (g - 1)), j = static_cast<unsigned>(cell0 / (g - 1));
+            bool ok = true;
+            for (std::size_t t = c * kChunk; t < end && ok; t += 2) {
+                const unsigned v00 = j * g + i, v10 = v00 + 1, v01 = v00 + g, v11 = v01 + 1;
+                ok = tris[t] == glm::uvec3(v00, v10, v11) && tris[t + 1] == glm::uvec3(v00, v11, v01);
+                if (++i == g - 1) {
+                    i = 0;
+                    ++j;
+                }
+            }
+            chunk_grid[c] = ok ? 1 : 0;
+        });
+        return std::all_of(chunk_grid.begin(), chunk_grid.end(), [](std::uint8_t f) { return f != 0; });
+    }
+
+    RasterStats draw_grid(const RasterTriangles& batch, bool accumulate, Image& target, int g);
 
     // Calls fn(sx, sy, band_lo, band_hi) for every copy of a triangle with bounding box b.
     template <class Fn>
@@ -178,6 +176,162 @@ TriangleRaster::~TriangleRaster() = default;
 TriangleRaster::TriangleRaster(TriangleRaster&&) noexcept = default;
 TriangleRaster& TriangleRaster::operator=(TriangleRaster&&) noexcept = default;
 
+// Structured grid, Area coverage, no wrap: every interior edge is shared by two triangles, so it is drawn
+// once with the difference of their weights (half the edge work), and the pattern replaces the per-
+// triangle bookkeeping of the general path. Edge type 0, 1, 2 of vertex v joins v to v + 1, v + g,
+// v + g + 1, drawn in that direction with the weight of the triangle traversing it so, minus the one
+// traversing it backwards. Lists are filled per fixed chunk of vertex rows and each band reads them in
+// input order, so the result is the same for any thread count.
+RasterStats TriangleRaster::Impl::draw_grid(const RasterTriangles& batch, bool accumulate, Image& target, int g) {
+    const glm::vec2* const P = batch.positions.data();
+    const float* const values = batch.triangle_values.data();
+    const std::size_t ntri = batch.triangles.size(), nb = static_cast<std::size_t>(bands);
+    const std::size_t cells = static_cast<std::size_t>(g - 1);
+    const int W = width, H = height;
+    kinds.resize(ntri);
+    tri_weight.resize(ntri);
+
+    // Edge lists per [vertex-row chunk][part][band]: part 0 holds the chunk's first vertex row, whose edges
+    // need the previous chunk's triangles, part 1 its other rows; a band reads them in that order.
+    const int chunks = (g + kGridChunkRows - 1) / kGridChunkRows;
+    grid_lists.resize(static_cast<std::size_t>(chunks) * 2 * nb);
+    auto lists_of = [&](int c, int part) { return grid_lists.data() + (static_cast<std::size_t>(c) * 2 + part) * nb; };
+    const double* const tw = tri_weight.data();
+    const float fw = static_cast<float>(W), fh = static_cast<float>(H);
+    const int last_row = H - 1;
+    // Lists every edge of vertex row j with a non-zero weight, and every point-deposit triangle of cell row
+    // j, in the bands they touch.
+    auto bin_row = [&](int j, std::vector<GridEdge>* lists) {
+        const bool in_j = j + 1 < g;
+        for (int i = 0; i < g; ++i) {
+            const std::size_t v = static_cast<std::size_t>(j) * g + i;
+            const std::size_t tA = 2 * (static_cast<std::size_t>(j) * cells + i), tB = tA + 1;
+            const std::size_t left = tA - 2, below = tA - 2 * cells + 1;
+            const bool in_i = i + 1 < g;
+            double w[3];
+            w[0] = in_i ? (in_j ? tw[tA] : 0.0) - (j > 0 ? tw[below] : 0.0) : 0.0;
+            w[1] = in_j ? (i > 0 ? tw[left] : 0.0) - (in_i ? tw[tB] : 0.0) : 0.0;
+            w[2] = in_i && in_j ? tw[tB] - tw[tA] : 0.0;
+            const std::size_t other[3] = {v + 1, v + g, v + g + 1};
+            for (int type = 0; type < 3; ++type) {
+                if (w[type] == 0.0) continue;
+                const glm::vec2 a = P[v], b = P[other[type]];
+                if (std::min(a.x, b.x) >= fw) continue;   // deposits right of the image only
+                const float lo = std::min(a.y, b.y), hi = std::max(a.y, b.y);
+                if (!(hi > 0.0f && lo < fh && lo != hi)) continue;
+                const int band_lo = static_cast<int>(std::max(lo, 0.0f)) / kBandRows;
+                const int band_hi = std::min(static_cast<int>(hi), last_row) / kBandRows;
+                const std::uint32_t code = static_cast<std::uint32_t>(v << 2) | static_cast<std::uint32_t>(type);
+                for (int band = band_lo; band <= band_hi; ++band) lists[band].push_back({w[type], code});
+            }
+            if (!(in_i && in_j)) continue;
+            for (std::size_t t : {tA, tB}) {
+                if (kinds[t] != kOnePixel && kinds[t] != kDegenerate) continue;
+                const glm::uvec3 tri = batch.triangles[t];
+                const Box box = bounding_box(P[tri.x], P[tri.y], P[tri.z]);
+                const glm::ivec2 span = band_span(box.ymin, box.ymax, H);
+                for (int band = span.x; band <= span.y; ++band)
+                    lists[band].push_back({0.0, static_cast<std::uint32_t>(t << 2) | 3u});
+            }
+        }
+    };
+
+    // Pass 1, chunks of rows: classify the two triangles of every cell, then list the edges of the rows
+    // whose triangles are all the chunk's own (the cache still holds their weights).
+    chunk_stats.assign(static_cast<std::size_t>(chunks), RasterStats{});
+    tbb::parallel_for(0, chunks, [&](int c) {
+        const int j0 = c * kGridChunkRows, j1 = std::min(g, j0 + kGridChunkRows);
+        TriangleKind* const kind = kinds.data();
+        double* const weight = tri_weight.data();
+        RasterStats st;
+        // Both triangles of a cell share the diagonal p00-p11: its box and finiteness are found once.
+        auto classify = [&](std::size_t t, const Box& diagonal, bool diagonal_finite, glm::vec2 p0, glm::vec2 p1,
+                            glm::vec2 p2, glm::vec2 apex) {
+            const float value = values[t];
+            TriangleKind k = kSkip;
+            double w = 0.0;
+            if (value != 0.0f) {
+                const Box b{std::min(diagonal.xmin, apex.x), std::min(diagonal.ymin, apex.y),
+                            std::max(diagonal.xmax, apex.x), std::max(diagonal.ymax, apex.y)};
+                if (!(diagonal_finite && std::isfinite(apex.x) && std::isfinite(apex.y) && std::isfinite(value))) {
+                    ++st.nonfinite;
+                } else if (b.xmax >= 0.0f && b.xmin < fw && b.ymax >= 0.0f && b.ymin < fh) {
+                    const double cross = cross2(p0, p1, p2);
+                    k = area_kind(b, cross);
+                    ++st.drawn;
+                    if (k == kNormal) w = area_weight(cross, value);
+                    else ++st.point_deposits;
+                }
+            }
+            kind[t] = k;
+            weight[t] = w;
+        };
+        const std::size_t cell_end = std::min(cells, static_cast<std::size_t>(j1));
+        for (std::size_t j = static_cast<std::size_t>(j0); j < cell_end; ++j) {
+            const glm::vec2* row = P + j * g;
+            for (std::size_t i = 0; i < cells; ++i) {
+                const glm::vec2 p00 = row[i], p10 = row[i + 1], p01 = row[i + g], p11 = row[i + g + 1];
+                const Box diagonal{std::min(p00.x, p11.x), std::min(p00.y, p11.y), std::max(p00.x, p11.x),
+                                   std::max(p00.y, p11.y)};
+                const bool diagonal_finite =
+                    std::isfinite(p00.x) && std::isfinite(p00.y) && std::isfinite(p11.x) && std::isfinite(p11.y);
+                const std::size_t t = 2 * (j * cells + i);
+                classify(t, diagonal, diagonal_finite, p00, p10, p11, p10);
+                classify(t + 1, diagonal, diagonal_finite, p00, p11, p01, p01);
+            }
+        }
+        chunk_stats[static_cast<std::size_t>(c)] = st;
+        std::vector<GridEdge>* const lists = lists_of(c, 1);
+        for (std::size_t b = 0; b < nb; ++b) lists[b].clear();
+        for (int j = j0 + 1; j < j1; ++j) bin_row(j, lists);
+    });
+    // Pass 2: the first row of every chunk.
+    tbb::parallel_for(0, chunks, [&](int c) {
+        std::vector<GridEdge>* const lists = lists_of(c, 0);
+        for (std::size_t b = 0; b < nb; ++b) lists[b].clear();
+        bin_row(c * kGridChunkRows, lists);
+    });
+
+    // Pass 3: draw band by band (each band owns its rows of the target).
+    const std::size_t stride = static_cast<std::size_t>(W) + 2;
+    const std::uint32_t step[3] = {1u, static_cast<std::uint32_t>(g), static_cast<std::uint32_t>(g) + 1u};
+    tbb::parallel_for(tbb::blocked_range<int>(0, bands, 1), [&](const tbb::blocked_range<int>& range) {
+        double* const acc = band_accumulator(stride);
+        for (int band = range.begin(); band != range.end(); ++band) {
+            const int row0 = band * kBandRows, row1 = std::min(H, row0 + kBandRows);
+            for (std::size_t list = 0; list < 2 * static_cast<std::size_t>(chunks); ++list) {
+                for (const GridEdge& e : grid_lists[list * nb + band]) {
+                    const std::uint32_t type = e.code & 3u, id = e.code >> 2;
+                    if (type != 3u) {
+                        area_coverage::accumulate_edge(acc, stride, row0, row1, W, glm::dvec2(P[id]),
+                                                       glm::dvec2(P[id + step[type]]), e.weight);
+                        continue;
+                    }
+                    const glm::uvec3 tri = batch.triangles[id];
+                    const double value = values[id];
+                    if (kinds[id] == kOnePixel) {
+                        const Box b = bounding_box(P[tri.x], P[tri.y], P[tri.z]);
+                        area_coverage::accumulate_point(acc, row0, row1, W, b.xmin, b.ymin, value);
+                    } else {
+                        for (unsigned vi : {tri.x, tri.y, tri.z})
+                            area_coverage::accumulate_point(acc, row0, row1, W, P[vi].x, P[vi].y, value / 3.0);
+                    }
+                }
+            }
+            area_coverage::resolve_band(acc, W, row1 - row0, target.pixels.data() + static_cast<std::size_t>(row0) * W,
+                                        accumulate);
+        }
+    });
+
+    RasterStats total;
+    for (const RasterStats& s : chunk_stats) {
+        total.drawn += s.drawn;
+        total.nonfinite += s.nonfinite;
+        total.point_deposits += s.point_deposits;
+    }
+    return total;
+}
+
 RasterStats TriangleRaster::draw(const RasterTriangles& batch, const RasterOptions& options, Image& target) {
     Impl& m = *impl_;
     if (target.channels != 1 || target.width <= 0 || target.height <= 0 ||
@@ -199,6 +353,19 @@ RasterStats TriangleRaster::draw(const RasterTriangles& batch, const RasterOptio
     const std::size_t ntri = batch.triangles.size();
     const std::size_t chunks = (ntri + kChunk - 1) / kChunk;
     const std::size_t bands = static_cast<std::size_t>(m.bands);
+    const auto& pos = batch.positions;
+    const auto& tris = batch.triangles;
+    const std::size_t npos = pos.size();
+
+    // A structured grid (g x g vertices, as the surface grids of caustic_triangles) in Area mode without
+    // wrap takes the shared-edge path (draw_grid).
+    if (area && !m.wrap && ntri > 0) {
+        const auto g = static_cast<std::size_t>(std::llround(std::sqrt(static_cast<double>(npos))));
+        if (g >= 2 && g * g == npos && ntri == 2 * (g - 1) * (g - 1) && g < (std::size_t{1} << 14) &&
+            m.is_grid(tris, static_cast<unsigned>(g)))
+            return m.draw_grid(batch, options.accumulate, target, static_cast<int>(g));
+    }
+
     m.boxes.resize(ntri);
     m.kinds.resize(ntri);
     if (!m.wrap) m.band_range.resize(ntri);
@@ -206,51 +373,20 @@ RasterStats TriangleRaster::draw(const RasterTriangles& batch, const RasterOptio
     m.cursors.resize(chunks * bands);
     m.band_start.resize(bands + 1);
     m.chunk_stats.assign(chunks, RasterStats{});
-
-    const auto& pos = batch.positions;
-    const auto& tris = batch.triangles;
-    const std::size_t npos = pos.size();
-
-    // A structured grid (g x g vertices, cells (i, j) split into {v00, v10, v11}, {v00, v11, v01}, as the
-    // surface grids of caustic_triangles): in Area mode without wrap every interior edge is shared by two
-    // triangles, so it is drawn once with the difference of their weights (half the edge work).
-    int grid_g = 0;
-    if (area && !m.wrap && ntri > 0) {
-        const auto g = static_cast<std::size_t>(std::llround(std::sqrt(static_cast<double>(npos))));
-        if (g >= 2 && g * g == npos && ntri == 2 * (g - 1) * (g - 1) && g < (std::size_t{1} << 14))
-            grid_g = static_cast<int>(g);
-    }
     m.tri_weight.resize(area ? ntri : 0);
-    m.chunk_grid.assign(chunks, grid_g > 0 ? 1 : 0);
 
     // Pass 1: classify, bound and count the band entries of every triangle copy (per chunk).
     tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
         RasterStats& st = m.chunk_stats[c];
         std::uint32_t* count = m.counts.data() + c * bands;
         const std::size_t end = std::min(ntri, (c + 1) * kChunk);
-        if (grid_g > 0) {   // the chunk starts on an even triangle: cell c * kChunk / 2
-            const unsigned g = static_cast<unsigned>(grid_g);
-            const std::size_t cell0 = c * kChunk / 2;
-            unsigned i = static_cast<unsigned>(cell0 % (g - 1)), j = static_cast<unsigned>(cell0 / (g - 1));
-            bool ok = true;
-            for (std::size_t t = c * kChunk; t < end && ok; t += 2) {
-                const unsigned v00 = j * g + i, v10 = v00 + 1, v01 = v00 + g, v11 = v01 + 1;
-                ok = tris[t] == glm::uvec3(v00, v10, v11) && tris[t + 1] == glm::uvec3(v00, v11, v01);
-                if (++i == g - 1) {
-                    i = 0;
-                    ++j;
-                }
-            }
-            m.chunk_grid[c] = ok ? 1 : 0;
-        }
-        // Local pointers: the byte stores to kinds would otherwise make every vector reload its data.
-        std::uint8_t* const kinds = m.kinds.data();
+        // Local pointers: stores through the vectors would otherwise make every one reload its data.
+        TriangleKind* const kinds = m.kinds.data();
         double* const tri_weight = m.tri_weight.data();
         Box* const boxes = m.boxes.data();
         glm::ivec2* const band_range = m.band_range.data();
         const glm::vec2* const P = pos.data();
         const float* const values = batch.triangle_values.data();
-        const bool count_bands = grid_g == 0;   // grid: the edges are binned instead (bin_grid)
         RasterStats local;
         for (std::size_t t = c * kChunk; t < end; ++t) {
             kinds[t] = kSkip;
@@ -261,8 +397,7 @@ RasterStats TriangleRaster::draw(const RasterTriangles& batch, const RasterOptio
             if (tri.x >= npos || tri.y >= npos || tri.z >= npos)
                 throw std::invalid_argument("TriangleRaster::draw: triangle index out of range");
             const glm::vec2 p0 = P[tri.x], p1 = P[tri.y], p2 = P[tri.z];
-            bool finite = std::isfinite(value) && std::isfinite(p0.x) && std::isfinite(p0.y) &&
-                          std::isfinite(p1.x) && std::isfinite(p1.y) && std::isfinite(p2.x) && std::isfinite(p2.y);
+            bool finite = finite_triangle(p0, p1, p2, value);
             if (finite && interpolate)
                 finite = std::isfinite(batch.vertex_values[tri.x]) && std::isfinite(batch.vertex_values[tri.y]) &&
                          std::isfinite(batch.vertex_values[tri.z]);
@@ -270,28 +405,17 @@ RasterStats TriangleRaster::draw(const RasterTriangles& batch, const RasterOptio
                 ++local.nonfinite;
                 continue;
             }
-            const Box b{std::min({p0.x, p1.x, p2.x}), std::min({p0.y, p1.y, p2.y}),
-                        std::max({p0.x, p1.x, p2.x}), std::max({p0.y, p1.y, p2.y})};
+            const Box b = bounding_box(p0, p1, p2);
             TriangleKind kind = kNormal;
             if (area) {
-                const double fx = std::floor(static_cast<double>(b.xmin));
-                const double fy = std::floor(static_cast<double>(b.ymin));
-                if (b.xmax <= fx + 1.0 && b.ymax <= fy + 1.0) {
-                    kind = kOnePixel;
-                } else {
-                    const glm::dvec2 e1 = glm::dvec2(p1) - glm::dvec2(p0), e2 = glm::dvec2(p2) - glm::dvec2(p0);
-                    const double area2 = std::abs(e1.x * e2.y - e1.y * e2.x);
-                    const double diag2 = double(b.xmax - b.xmin) * (b.xmax - b.xmin) + double(b.ymax - b.ymin) * (b.ymax - b.ymin);
-                    if (area2 <= 2e-8 + 2e-10 * diag2) kind = kDegenerate;   // would divide by ~0
-                }
+                kind = area_kind(b, cross2(p0, p1, p2));
             } else if (std::max({std::abs(b.xmin), std::abs(b.xmax), std::abs(b.ymin), std::abs(b.ymax)}) >
                        kMaxFixedCoordinate) {
                 ++local.too_large;
                 continue;
             }
             const int copies = m.for_each_copy(b, [&](int, int, int lo, int hi) {
-                if (count_bands)
-                    for (int band = lo; band <= hi; ++band) ++count[band];
+                for (int band = lo; band <= hi; ++band) ++count[band];
                 if (!m.wrap) band_range[t] = {lo, hi};
             });
             if (copies < 0) {
@@ -301,34 +425,14 @@ RasterStats TriangleRaster::draw(const RasterTriangles& batch, const RasterOptio
             if (copies == 0) continue;
             boxes[t] = b;
             kinds[t] = kind;
-            if (area && kind == kNormal) {
-                // Coverage accumulates with the sign of -(signed area): weight = value / coverage. Wrap
-                // copies are shifted by whole tiles, which leaves the (exact) differences unchanged.
-                const glm::dvec2 q0(p0), q1(p1), q2(p2);
-                const double signed_area = 0.5 * ((q1.x - q0.x) * (q2.y - q0.y) - (q1.y - q0.y) * (q2.x - q0.x));
-                tri_weight[t] = -static_cast<double>(value) / signed_area;
-            }
+            if (area && kind == kNormal) tri_weight[t] = area_weight(cross2(p0, p1, p2), value);
             local.drawn += copies;
             if (kind == kOnePixel || kind == kDegenerate) ++local.point_deposits;
         }
         st = local;
     });
 
-    const bool grid = grid_g > 0 && std::all_of(m.chunk_grid.begin(), m.chunk_grid.end(), [](std::uint8_t f) { return f != 0; });
-    if (grid) {
-        m.bin_grid(pos, grid_g);
-    } else if (grid_g > 0) {   // not a grid after all: count the band entries pass 1 skipped
-        tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
-            std::uint32_t* count = m.counts.data() + c * bands;
-            const std::size_t end = std::min(ntri, (c + 1) * kChunk);
-            for (std::size_t t = c * kChunk; t < end; ++t)
-                if (m.kinds[t] != kSkip)
-                    for (int band = m.band_range[t].x; band <= m.band_range[t].y; ++band) ++count[band];
-        });
-    }
-
     // Entry offsets (band_bins.hpp): each band lists its triangles in input order.
-    if (!grid) {
     m.entries.resize(band_offsets(m.counts, chunks, bands, m.cursors, m.band_start));
 
     // Pass 2: fill the band lists.
@@ -349,7 +453,6 @@ RasterStats TriangleRaster::draw(const RasterTriangles& batch, const RasterOptio
             });
         }
     });
-    }
 
     // Pass 3: draw band by band (each band owns its rows of the target).
     const int W = m.width, H = m.height;
@@ -357,40 +460,11 @@ RasterStats TriangleRaster::draw(const RasterTriangles& batch, const RasterOptio
     tbb::parallel_for(tbb::blocked_range<int>(0, m.bands, 1), [&](const tbb::blocked_range<int>& range) {
         for (int band = range.begin(); band != range.end(); ++band) {
             const int row0 = band * kBandRows, row1 = std::min(H, row0 + kBandRows);
-            const BinEntry* first = grid ? nullptr : m.entries.data() + m.band_start[band];
-            const BinEntry* last = grid ? nullptr : m.entries.data() + m.band_start[band + 1];
+            const BinEntry* first = m.entries.data() + m.band_start[band];
+            const BinEntry* last = m.entries.data() + m.band_start[band + 1];
             if (area) {
-                std::vector<double>& acc = m.band_acc.local();
-                if (acc.size() < stride * kBandRows) acc.assign(stride * kBandRows, 0.0);
-                auto deposit = [&](double x, double y, double value) {
-                    const double fx = std::floor(x), fy = std::floor(y);
-                    if (fx < 0.0 || fx >= W || fy < row0 || fy >= row1) return;
-                    double* a = acc.data() + static_cast<std::size_t>(fy - row0) + static_cast<std::size_t>(fx) * kRows;
-                    a[0] += value;
-                    a[kRows] -= value;
-                };
-                if (grid) {
-                    const std::uint32_t g = static_cast<std::uint32_t>(grid_g);
-                    const std::uint32_t step[3] = {1u, g, g + 1u};
-                    const std::uint32_t* ge = m.grid_entries.data();
-                    for (std::uint32_t k = m.band_start[band], kend = m.band_start[band + 1]; k != kend; ++k) {
-                        const std::uint32_t code = ge[k], type = code & 3u, id = code >> 2;
-                        if (type != 3u) {
-                            accumulate_edge(acc.data(), stride, row0, row1, W, glm::dvec2(pos[id]),
-                                            glm::dvec2(pos[id + step[type]]), m.edge_weight[3 * std::size_t{id} + type]);
-                            continue;
-                        }
-                        const glm::uvec3 tri = tris[id];
-                        const double value = batch.triangle_values[id];
-                        if (m.kinds[id] == kOnePixel) {
-                            const Box& b = m.boxes[id];
-                            deposit(b.xmin, b.ymin, value);
-                        } else {
-                            for (unsigned vi : {tri.x, tri.y, tri.z}) deposit(pos[vi].x, pos[vi].y, value / 3.0);
-                        }
-                    }
-                }
-                for (const BinEntry* e = first; e != last && !grid; ++e) {
+                double* const acc = m.band_accumulator(stride);
+                for (const BinEntry* e = first; e != last; ++e) {
                     const glm::uvec3 tri = tris[e->triangle];
                     const glm::dvec2 shift(static_cast<double>(e->sx) * W, static_cast<double>(e->sy) * H);
                     const glm::dvec2 p0 = glm::dvec2(pos[tri.x]) + shift, p1 = glm::dvec2(pos[tri.y]) + shift,
@@ -399,35 +473,19 @@ RasterStats TriangleRaster::draw(const RasterTriangles& batch, const RasterOptio
                     const std::uint8_t kind = m.kinds[e->triangle];
                     if (kind == kOnePixel) {
                         const Box& b = m.boxes[e->triangle];
-                        deposit(b.xmin + shift.x, b.ymin + shift.y, value);
+                        area_coverage::accumulate_point(acc, row0, row1, W, b.xmin + shift.x, b.ymin + shift.y, value);
                     } else if (kind == kDegenerate) {
-                        for (const glm::dvec2& p : {p0, p1, p2}) deposit(p.x, p.y, value / 3.0);
+                        for (const glm::dvec2& p : {p0, p1, p2})
+                            area_coverage::accumulate_point(acc, row0, row1, W, p.x, p.y, value / 3.0);
                     } else {
                         const double weight = m.tri_weight[e->triangle];
-                        accumulate_edge(acc.data(), stride, row0, row1, W, p0, p1, weight);
-                        accumulate_edge(acc.data(), stride, row0, row1, W, p1, p2, weight);
-                        accumulate_edge(acc.data(), stride, row0, row1, W, p2, p0, weight);
+                        accumulate_edge(acc, stride, row0, row1, W, p0, p1, weight);
+                        accumulate_edge(acc, stride, row0, row1, W, p1, p2, weight);
+                        accumulate_edge(acc, stride, row0, row1, W, p2, p0, weight);
                     }
                 }
-                // Prefix sums along the rows, all rows of the band at once (column-major: vectorises).
-                const int nrows = row1 - row0;
-                float* out = target.pixels.data() + static_cast<std::size_t>(row0) * W;
-                double run[kRows] = {};
-                double* a = acc.data();
-                for (int x = 0; x < W; ++x, a += kRows) {
-                    float col[kRows];
-                    for (int r = 0; r < kRows; ++r) {
-                        run[r] += a[r];
-                        a[r] = 0.0;
-                        col[r] = static_cast<float>(run[r]);
-                    }
-                    if (options.accumulate) {
-                        for (int r = 0; r < nrows; ++r) out[static_cast<std::size_t>(r) * W + x] += col[r];
-                    } else {
-                        for (int r = 0; r < nrows; ++r) out[static_cast<std::size_t>(r) * W + x] = col[r];
-                    }
-                }
-                std::fill(a, a + 2 * kRows, 0.0);
+                area_coverage::resolve_band(acc, W, row1 - row0, target.pixels.data() + static_cast<std::size_t>(row0) * W,
+                                            options.accumulate);
                 continue;
             }
 

@@ -5,6 +5,7 @@
 // Band accumulators are column-major (column i of band row r at acc[i * kRows + r]) so that the prefix
 // sum over all rows of a band vectorises.
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 
 #include <glm/glm.hpp>
@@ -109,6 +110,48 @@ inline void accumulate_edge(double* acc, std::size_t stride, int row0, int row1,
         accumulate_line(acc, stride, row0, row1, width, outside ? xc : std::clamp(p.x, 0.0, width), p.y,
                         outside ? xc : std::clamp(q.x, 0.0, width), q.y, weight);
     }
+}
+
+// Deposits a whole value into the pixel containing (x, y) when that pixel lies in the band [row0, row1)
+// (point deposits: triangles inside one pixel and degenerate ones).
+inline void accumulate_point(double* acc, int row0, int row1, int width, double x, double y, double value) {
+    const double fx = std::floor(x), fy = std::floor(y);
+    if (fx < 0.0 || fx >= width || fy < row0 || fy >= row1) return;
+    double* a = acc + static_cast<std::size_t>(fy - row0) + static_cast<std::size_t>(fx) * kRows;
+    a[0] += value;
+    a[kRows] -= value;
+}
+
+// Turns a band's deposits into coverage: prefix sums along its rows, all rows at once (column-major:
+// vectorises), written to `out` (the band's first row of a row-major image `width` wide, `nrows` rows)
+// by adding or overwriting. Columns go through a small row-major tile so that the image is written in
+// runs along its rows rather than a pixel per row per column. Clears the accumulator for the next band.
+inline void resolve_band(double* acc, int width, int nrows, float* out, bool accumulate) {
+    constexpr int kTile = 64;   // columns per tile (a 4 KiB tile of floats stays in L1)
+    double run[kRows] = {};
+    float tile[kRows][kTile];
+    double* a = acc;
+    for (int x0 = 0; x0 < width; x0 += kTile) {
+        const int n = std::min(kTile, width - x0);
+        for (int k = 0; k < n; ++k, a += kRows)
+            for (int r = 0; r < kRows; ++r) {
+                run[r] += a[r];
+                a[r] = 0.0;
+                tile[r][k] = static_cast<float>(run[r]);
+            }
+        for (int r = 0; r < nrows; ++r) {
+            float* o = out + static_cast<std::size_t>(r) * width + x0;
+            const float* t = tile[r];
+            if (accumulate) {
+                for (int k = 0; k < n; ++k) o[k] += t[k];
+            } else if (n == kTile) {   // fixed length: plain vector moves (a string copy starts slowly)
+                for (int k = 0; k < kTile; ++k) o[k] = t[k];
+            } else {
+                for (int k = 0; k < n; ++k) o[k] = t[k];
+            }
+        }
+    }
+    std::fill(a, a + 2 * kRows, 0.0);
 }
 
 }  // namespace caustics::area_coverage

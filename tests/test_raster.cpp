@@ -210,6 +210,79 @@ TEST(RasterArea, FluxConservedForManyTrianglesInside) {
     for (float v : img.pixels) EXPECT_GE(v, -1e-4f);
 }
 
+TEST(RasterArea, GridPathMatchesGeneralPath) {
+    // A g x g vertex grid split as {v00, v10, v11}, {v00, v11, v01} takes the shared-edge path. Warped
+    // so that it folds over, spills past every border, has sub-pixel and zero-area cells, a non-finite
+    // vertex and zero values; the same triangles with one unused extra position (not a grid) take the
+    // general path. Both must give the same map up to round-off, the same statistics, and conserve the
+    // flux of the triangles inside the map to the general path's bound (1e-5).
+    const int g = 48, W = 40, H = 36;
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> jitter(-0.4f, 0.4f), f(0.1f, 2.0f);
+    Batch grid;
+    for (int j = 0; j < g; ++j)
+        for (int i = 0; i < g; ++i) {
+            glm::vec2 p(-4.0f + 1.0f * i + jitter(rng), -3.0f + 0.9f * j + jitter(rng));
+            p.x += 3.0f * std::sin(0.3f * j);                            // shears rows: folds
+            if (i >= 20 && i < 24 && j >= 10 && j < 14) p = glm::vec2(12.3f + 0.05f * i, 9.6f + 0.05f * j);  // sub-pixel
+            if (i >= 30 && i < 33) p.y = 20.0f + 0.5f * static_cast<float>(i);   // columns collapse: zero-area cells
+            grid.positions.push_back(p);
+        }
+    grid.positions[static_cast<std::size_t>(5 * g + 7)].x = std::nanf("");
+    for (unsigned j = 0; j + 1 < static_cast<unsigned>(g); ++j)
+        for (unsigned i = 0; i + 1 < static_cast<unsigned>(g); ++i) {
+            const unsigned v00 = j * g + i, v10 = v00 + 1, v01 = v00 + g, v11 = v01 + 1;
+            grid.triangles.push_back({v00, v10, v11});
+            grid.triangles.push_back({v00, v11, v01});
+            grid.values.push_back((i + j) % 17 == 0 ? 0.0f : f(rng));
+            grid.values.push_back(f(rng));
+        }
+    Batch general = grid;
+    general.positions.push_back({0.0f, 0.0f});   // g * g + 1 positions: not a grid
+    RasterStats sg, sn;
+    const Image a = draw(grid, RasterCoverage::Area, W, H, false, &sg);
+    const Image b = draw(general, RasterCoverage::Area, W, H, false, &sn);
+    EXPECT_EQ(sg.drawn, sn.drawn);
+    EXPECT_EQ(sg.nonfinite, sn.nonfinite);
+    EXPECT_EQ(sg.point_deposits, sn.point_deposits);
+    EXPECT_GT(sg.point_deposits, 0);
+    EXPECT_GT(sg.nonfinite, 0);
+    for (std::size_t k = 0; k < a.pixels.size(); ++k) ASSERT_NEAR(a.pixels[k], b.pixels[k], 2e-5) << k;
+    // Flux of the triangles lying inside the map (pixels' area fully inside: nothing clipped).
+    double inside = 0.0, total = 0.0;
+    for (std::size_t t = 0; t < grid.triangles.size(); ++t) {
+        const glm::uvec3 tri = grid.triangles[t];
+        bool in = true;
+        for (unsigned v : {tri.x, tri.y, tri.z}) {
+            const glm::vec2 p = grid.positions[v];
+            in = in && p.x >= 0.0f && p.x <= W && p.y >= 0.0f && p.y <= H;   // false for NaN
+        }
+        if (in) inside += grid.values[t];
+        total += grid.values[t];
+    }
+    ASSERT_GT(inside, 0.3 * total);
+    Batch inner = grid;   // the same grid with the outside triangles' values zeroed
+    for (std::size_t t = 0; t < inner.triangles.size(); ++t) {
+        const glm::uvec3 tri = inner.triangles[t];
+        for (unsigned v : {tri.x, tri.y, tri.z}) {
+            const glm::vec2 p = inner.positions[v];
+            if (!(p.x >= 0.0f && p.x <= W && p.y >= 0.0f && p.y <= H)) inner.values[t] = 0.0f;
+        }
+    }
+    EXPECT_NEAR(sum(draw(inner, RasterCoverage::Area, W, H)), inside, 1e-5 * inside);
+    // The same for any thread count.
+    Image one, four;
+    {
+        tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
+        one = draw(grid, RasterCoverage::Area, W, H);
+    }
+    {
+        tbb::global_control c(tbb::global_control::max_allowed_parallelism, 4);
+        four = draw(grid, RasterCoverage::Area, W, H);
+    }
+    EXPECT_EQ(one.pixels, four.pixels);
+}
+
 TEST(RasterWrap, TrianglesReenterOnTheOtherSide) {
     const int W = 16, H = 12;
     // A triangle crossing the right and bottom borders.

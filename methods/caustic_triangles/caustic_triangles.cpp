@@ -20,6 +20,7 @@
 #include <tbb/parallel_for.h>
 
 #include "method.hpp"
+#include "plane_refraction.hpp"
 #include "raster.hpp"
 #include "registry.hpp"
 #include "spectral_ramp.hpp"
@@ -117,6 +118,8 @@ private:
     Counters refract_vertices(const FrameGeometry& frame, const ChartMap& map, int width, int height,
                               double ior, double absorption, const glm::dvec3& light_dir,
                               bool periodic_target = false);
+    Counters refract_to_plane(const ChartMap& map, int width, int height, double ior, double absorption,
+                              const glm::dvec3& light_dir, bool fresnel, bool periodic_target);
     void triangle_values(const ChartMap& map, double scale, Counters& counters);
     // One pass per dispersion sample (one pass without dispersion): refract every vertex with that
     // sample's index, turn the triangles into flux values and rasterise them. `scalar` receives the
@@ -133,6 +136,7 @@ private:
     // Per-frame buffers, kept between renders (no allocation after the first frame of a given size).
     std::vector<glm::uvec3> triangles_;    // the surface grid's triangles (fixed topology)
     std::vector<double> xs_, ys_;          // world x of grid column i, y of row j
+    std::vector<float> xr_;                // plane receiver: xs_ relative to the plane's origin
     std::vector<float> height_;            // resampled surface, grid x grid
     std::vector<glm::vec2> gradient_;
     std::vector<float> flux_;              // incident flux per surface triangle [W]
@@ -193,6 +197,11 @@ void CausticTriangles::resample_surface(const HeightField& hf) {
         xs_[static_cast<std::size_t>(k)] = hf.origin.x + extent.x * k / (g - 1);
         ys_[static_cast<std::size_t>(k)] = hf.origin.y + extent.y * k / (g - 1);
     }
+    if (hf.nx == g && hf.ny == g) {   // the grid is the height field's own: every tap has weight 1
+        std::copy(hf.height.begin(), hf.height.end(), height_.begin());
+        std::copy(hf.gradient.begin(), hf.gradient.end(), gradient_.begin());
+        return;
+    }
     const int dx = hf.nx > 1 ? 1 : 0;
     const int dy = hf.ny > 1 ? hf.nx : 0;
     tbb::parallel_for(tbb::blocked_range<int>(0, g, 16), [&](const tbb::blocked_range<int>& rows) {
@@ -221,15 +230,15 @@ void CausticTriangles::compute_triangle_flux(const glm::dvec3& light_dir, double
         for (int j = rows.begin(); j != rows.end(); ++j) {
             for (int i = 0; i + 1 < g; ++i) {
                 const std::size_t t = 2 * (static_cast<std::size_t>(j) * (g - 1) + i);
-                // The cell's corners (ensure_topology: {v00, v10, v11}, {v00, v11, v01}).
+                // The cell's corners (ensure_topology: {v00, v10, v11}, {v00, v11, v01}) span dx, dy
+                // horizontally: the cross products of the edge vectors from v00 in closed form.
                 const std::size_t v00 = static_cast<std::size_t>(j) * g + i, v01 = v00 + g;
-                const glm::dvec3 c00(xs_[i], ys_[j], height_[v00]), c10(xs_[i + 1], ys_[j], height_[v00 + 1]);
-                const glm::dvec3 c01(xs_[i], ys_[j + 1], height_[v01]), c11(xs_[i + 1], ys_[j + 1], height_[v01 + 1]);
-                const glm::dvec3 p[2][3] = {{c00, c10, c11}, {c00, c11, c01}};
-                for (int half = 0; half < 2; ++half) {
-                    const glm::dvec3 area_vector = 0.5 * glm::cross(p[half][1] - p[half][0], p[half][2] - p[half][0]);
-                    flux_[t + half] = static_cast<float>(e0 * std::max(0.0, -glm::dot(area_vector, light_dir)));
-                }
+                const double dx = xs_[i + 1] - xs_[i], dy = ys_[j + 1] - ys_[j];
+                const double h00 = height_[v00], h10 = height_[v00 + 1], h01 = height_[v01], h11 = height_[v01 + 1];
+                const glm::dvec3 area_vector[2] = {0.5 * glm::dvec3(-(h10 - h00) * dy, dx * (h10 - h11), dx * dy),
+                                                   0.5 * glm::dvec3(dy * (h01 - h11), -dx * (h01 - h00), dx * dy)};
+                for (int half = 0; half < 2; ++half)
+                    flux_[t + half] = static_cast<float>(e0 * std::max(0.0, -glm::dot(area_vector[half], light_dir)));
             }
         }
     });
@@ -244,6 +253,7 @@ CausticTriangles::Counters CausticTriangles::refract_vertices(const FrameGeometr
     const double eta = 1.0 / ior;   // air above, water below
     image_.resize(static_cast<std::size_t>(g) * g);
     weight_.resize(image_.size());
+    if (map.plane) return refract_to_plane(map, width, height, ior, absorption, light_dir, fresnel, periodic_target);
     tbb::combinable<Counters> counters;
     const float nan = std::numeric_limits<float>::quiet_NaN();
     tbb::parallel_for(tbb::blocked_range<int>(0, g, 8), [&](const tbb::blocked_range<int>& rows) {
@@ -320,34 +330,91 @@ CausticTriangles::Counters CausticTriangles::refract_vertices(const FrameGeometr
     return total;
 }
 
+// Plane receiver (the real-time case): refract_vertices in single precision (plane_refraction.hpp), a
+// straight loop over the grid with the vertices taken relative to the plane's origin.
+CausticTriangles::Counters CausticTriangles::refract_to_plane(const ChartMap& map, int width, int height, double ior,
+                                                              double absorption, const glm::dvec3& light_dir,
+                                                              bool fresnel, bool periodic_target) {
+    const int g = grid_;
+    caustic_triangles::PlaneRefraction c;
+    c.light = glm::vec3(light_dir);
+    c.eta = static_cast<float>(1.0 / ior);
+    c.ior = static_cast<float>(ior);
+    c.fresnel = fresnel;
+    c.absorption = static_cast<float>(absorption);
+    c.normal = glm::vec3(map.normal);
+    c.dual_s = glm::vec3(map.dual_s);
+    c.dual_t = glm::vec3(map.dual_t);
+    c.width = static_cast<float>(width);
+    c.height = static_cast<float>(height);
+    xr_.resize(static_cast<std::size_t>(g));
+    for (std::size_t i = 0; i < xr_.size(); ++i) xr_[i] = static_cast<float>(xs_[i] - map.origin.x);
+    const float zr = static_cast<float>(-map.origin.z);
+    constexpr int kRun = 64;   // vertices per run of each half (plane_refraction.hpp)
+    tbb::combinable<Counters> counters;
+    tbb::parallel_for(tbb::blocked_range<int>(0, g, 8), [&](const tbb::blocked_range<int>& rows) {
+        std::int64_t lost = 0;
+        for (int j = rows.begin(); j != rows.end(); ++j) {
+            const float yr = static_cast<float>(ys_[static_cast<std::size_t>(j)] - map.origin.y);
+            const std::size_t row = static_cast<std::size_t>(j) * g;
+            for (int i0 = 0; i0 < g; i0 += kRun) {
+                const int n = std::min(kRun, g - i0);
+                caustic_triangles::RefractedRay rays[kRun];
+                for (int k = 0; k < n; ++k) rays[k] = caustic_triangles::refract_ray(c, gradient_[row + i0 + k]);
+                for (int k = 0; k < n; ++k) {
+                    const int i = i0 + k;
+                    const std::size_t v = row + i;
+                    const caustic_triangles::RefractedVertex rv =
+                        caustic_triangles::intersect_plane(c, rays[k], glm::vec3(xr_[i], yr, height_[v] + zr));
+                    image_[v] = rv.image;
+                    weight_[v] = rv.weight;
+                    // A periodic target (texture tile) wraps: a point outside the tile is not lost.
+                    lost += (rv.lost || (!periodic_target && rv.outside)) ? 1 : 0;
+                }
+            }
+        }
+        counters.local().lost += lost;
+    });
+    Counters total;
+    counters.combine_each([&](const Counters& k) { total.lost += k.lost; });
+    return total;
+}
+
 // Triangle value for the raster: flux * mean vertex weight * scale (1 / bin area on planes, whose bins
 // all have the same area), divided by the image area in bins for centre sampling. Triangles with a
 // vertex that missed get 0 (the raster skips them).
 void CausticTriangles::triangle_values(const ChartMap& map, double scale, Counters& counters) {
+    const int g = grid_;
     values_.resize(triangles_.size());
     const bool per_centre = coverage_ == RasterCoverage::PixelCenter;
     std::atomic<std::int64_t> folded{0};
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, triangles_.size(), 8192),
-                      [&](const tbb::blocked_range<std::size_t>& r) {
-                          std::int64_t local_folded = 0;
-                          for (std::size_t t = r.begin(); t != r.end(); ++t) {
-                              const glm::uvec3 tri = triangles_[t];
-                              const glm::vec2 a = image_[tri.x], b = image_[tri.y], c = image_[tri.z];
-                              const float w = weight_[tri.x] + weight_[tri.y] + weight_[tri.z];
-                              const bool valid = std::isfinite(a.x) && std::isfinite(b.x) && std::isfinite(c.x);
-                              values_[t] = valid ? static_cast<float>(flux_[t] * (w / 3.0f) * scale) : 0.0f;
-                              if (valid && flux_[t] > 0.0f) {
-                                  const double signed_area = 0.5 * ((double(b.x) - a.x) * (double(c.y) - a.y) -
-                                                                    (double(b.y) - a.y) * (double(c.x) - a.x));
-                                  if (signed_area * map.orientation < 0.0) ++local_folded;
-                                  // Centre sampling writes a value per covered bin: the irradiance, i.e.
-                                  // flux / image area (not flux conserving; zero-area images cover no centre).
-                                  if (per_centre) values_[t] = signed_area != 0.0
-                                      ? static_cast<float>(values_[t] / std::abs(signed_area)) : 0.0f;
-                              }
-                          }
-                          folded += local_folded;
-                      });
+    auto value_of = [&](std::size_t t, std::size_t ia, std::size_t ib, std::size_t ic, std::int64_t& local_folded) {
+        const glm::vec2 a = image_[ia], b = image_[ib], c = image_[ic];
+        const float w = weight_[ia] + weight_[ib] + weight_[ic];
+        const bool valid = std::isfinite(a.x) && std::isfinite(b.x) && std::isfinite(c.x);
+        values_[t] = valid ? static_cast<float>(flux_[t] * (w / 3.0f) * scale) : 0.0f;
+        if (valid && flux_[t] > 0.0f) {
+            const double signed_area = 0.5 * ((double(b.x) - a.x) * (double(c.y) - a.y) -
+                                              (double(b.y) - a.y) * (double(c.x) - a.x));
+            if (signed_area * map.orientation < 0.0) ++local_folded;
+            // Centre sampling writes a value per covered bin: the irradiance, i.e. flux / image area (not
+            // flux conserving; zero-area images cover no centre).
+            if (per_centre)
+                values_[t] = signed_area != 0.0 ? static_cast<float>(values_[t] / std::abs(signed_area)) : 0.0f;
+        }
+    };
+    // The grid's cells in order (ensure_topology: {v00, v10, v11}, {v00, v11, v01}).
+    tbb::parallel_for(tbb::blocked_range<int>(0, g - 1, 16), [&](const tbb::blocked_range<int>& rows) {
+        std::int64_t local_folded = 0;
+        for (int j = rows.begin(); j != rows.end(); ++j)
+            for (int i = 0; i + 1 < g; ++i) {
+                const std::size_t t = 2 * (static_cast<std::size_t>(j) * (g - 1) + i);
+                const std::size_t v00 = static_cast<std::size_t>(j) * g + i, v01 = v00 + g;
+                value_of(t, v00, v00 + 1, v01 + 1, local_folded);
+                value_of(t + 1, v00, v01 + 1, v01, local_folded);
+            }
+        folded += local_folded;
+    });
     counters.folded += folded.load();
 }
 
