@@ -57,14 +57,22 @@ bool lit(const LookupContext& ctx, const glm::dvec3& p) {
     return entry.x >= l.water_lo.x && entry.x <= l.water_hi.x && entry.y >= l.water_lo.y && entry.y <= l.water_hi.y;
 }
 
+constexpr double kFaceTolerance = 1e-2;
+
 // Texture value at a receiver point; false when it falls outside the box.
 bool lookup_value(const LookupContext& ctx, glm::dvec3 p, float& value, bool& clamped) {
     const VolumeShape& s = ctx.lookup->texture->shape;
     clamped = false;
-    if (!s.contains(p)) {
+    // Receivers on the box's faces (walls bounding the water) have float G-buffer positions that land a
+    // rounding error on either side of the face: points within kFaceTolerance cells of the box are
+    // moved onto it, so such a wall does not read a speckle of zeros.
+    const glm::dvec3 lo = s.origin, hi = s.origin + s.extent();
+    const double tolerance = kFaceTolerance * s.spacing;
+    if (glm::any(glm::lessThan(p, lo - tolerance)) || glm::any(glm::greaterThan(p, hi + tolerance))) {
         value = 0.0f;
         return false;
     }
+    p = glm::clamp(p, lo, hi);
     if (!lit(ctx, p)) {
         value = 0.0f;
         return true;
