@@ -19,6 +19,13 @@ constexpr int kSubpixelBits = 8;
 constexpr double kSubpixel = 1 << kSubpixelBits;
 constexpr std::int64_t kSubpixelOne = 1 << kSubpixelBits;
 constexpr double kMaxPixel = 1 << 21;          // keeps fixed-point edge functions well inside int64
+constexpr int kSpan = 64;                      // pixels of a row interpolated together
+constexpr int kShortSpan = 16;                 // rows covering fewer pixels are drawn one pixel at a time
+
+// Per-pixel values of one span of a row (structure of arrays, so that the interpolation vectorises).
+struct Span {
+    float l0[kSpan], l1[kSpan], l2[kSpan], d[kSpan], px[kSpan], py[kSpan], pz[kSpan];
+};
 
 struct Setup {
     std::int64_t X[3], Y[3];      // fixed-point screen vertices, counter-clockwise in the E > 0 sense
@@ -30,11 +37,13 @@ struct Setup {
     bool front;                   // front facing (draw_front_back: selects the target)
 };
 
+// A projected vertex in fixed point: 8 bytes, so that the setup pass's gathers of a large mesh stay in
+// cache (|X|, |Y| <= kMaxPixel * kSubpixel = 2^29 fit int32). X == kNotProjected: behind the near plane,
+// not finite or too far off-screen. The depth is kept apart (read only for drawable triangles).
 struct VertexOut {
-    std::int64_t X = 0, Y = 0;
-    double z = 0.0;
-    bool ok = false;
+    std::int32_t X = 0, Y = 0;
 };
+constexpr std::int32_t kNotProjected = std::numeric_limits<std::int32_t>::min();
 
 inline std::int64_t floor_div(std::int64_t a, std::int64_t b) {
     const std::int64_t q = a / b;
@@ -50,6 +59,28 @@ inline std::int64_t edge(std::int64_t ax, std::int64_t ay, std::int64_t bx, std:
 // edge goes up (dy < 0). Two triangles sharing an edge traverse it in opposite directions, so exactly
 // one of them owns the centres lying on it.
 inline bool top_left(std::int64_t dx, std::int64_t dy) { return dy < 0 || (dy == 0 && dx > 0); }
+
+constexpr int kNarrow = 8;       // rows of a triangle narrower than this many centres are walked, not divided
+constexpr int kFewCentres = 4;   // bounding boxes of at most this many pixel centres are tested exactly
+
+// Whether the triangle (counter-clockwise in the E > 0 sense) covers one of the pixel centres of its
+// bounding box, by the draw pass's rule: E_k + bias_k >= 0 for the three edges (top-left rule).
+inline bool covers_a_centre(const Setup& s) {
+    const int a[3] = {1, 2, 0}, c[3] = {2, 0, 1};
+    for (int y = s.y0; y <= s.y1; ++y)
+        for (int x = s.x0; x <= s.x1; ++x) {
+            const std::int64_t px = (2 * static_cast<std::int64_t>(x) + 1) << (kSubpixelBits - 1);
+            const std::int64_t py = (2 * static_cast<std::int64_t>(y) + 1) << (kSubpixelBits - 1);
+            bool inside = true;
+            for (int k = 0; k < 3 && inside; ++k) {
+                const std::int64_t dx = s.X[c[k]] - s.X[a[k]], dy = s.Y[c[k]] - s.Y[a[k]];
+                const std::int64_t bias = top_left(dx, dy) ? 0 : -1;
+                inside = edge(s.X[a[k]], s.Y[a[k]], s.X[c[k]], s.Y[c[k]], px, py) + bias >= 0;
+            }
+            if (inside) return true;
+        }
+    return false;
+}
 
 // Every target has the projection's size; normals are absent or one per position.
 void check_inputs(const LightProjection& view, const GBufferTriangles& batch,
@@ -82,8 +113,9 @@ struct GBufferRaster::Impl {
     std::vector<glm::vec3> cpos, cnorm;    // near-clipped copy of the batch
     std::vector<glm::uvec3> ctri;
     std::vector<VertexOut> verts;
-    std::vector<Setup> setups;
-    std::vector<std::uint8_t> valid;
+    std::vector<double> vdepth;            // view depth per projected vertex
+    std::vector<Setup> setups;             // chunk c's drawable triangles packed from c * kChunk, in order
+    std::vector<std::uint32_t> drawable;   // per chunk: how many
     std::vector<std::uint32_t> counts, cursors, band_start;
     std::vector<std::uint32_t> entries;
     std::vector<GBufferStats> chunk_stats;
@@ -119,7 +151,7 @@ void GBufferRaster::clip_near(const LightProjection& view, const GBufferTriangle
     Impl& m = *impl_;
     const double zc = std::max(view.near_depth, 1e-3);
     const std::size_t nv = batch.positions.size();
-    m.vz.resize(nv);
+    if (m.vz.size() < nv) m.vz.resize(nv);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 8192), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t i = r.begin(); i != r.end(); ++i)
             m.vz[i] = static_cast<float>(glm::dot(glm::dvec3(batch.positions[i]) - view.eye, view.forward));
@@ -175,25 +207,31 @@ GBufferStats GBufferRaster::draw_clipped(const LightProjection& view, const GBuf
     const int W = target.width, H = target.height;
     const int bands = (H + kBandRows - 1) / kBandRows;
     const std::size_t chunks = (n + kChunk - 1) / kChunk;
-    m.setups.resize(n);
-    m.valid.assign(n, 0);
+    // Scratch only grows: batches of different sizes alternate every frame (a dense mesh, then a plane),
+    // and shrinking would make the next frame value-initialise the whole array again.
+    if (m.setups.size() < n) m.setups.resize(n);
+    m.drawable.assign(chunks, 0);
     m.counts.assign(chunks * bands, 0);
     m.chunk_stats.assign(chunks, GBufferStats{});
     const bool perspective = view.type == ProjectionType::Perspective;
 
     // Pass 0 (the vertex stage): every vertex projected once to fixed-point pixel coordinates.
     const std::size_t nv = batch.positions.size();
-    m.verts.resize(nv);
+    if (m.verts.size() < nv) m.verts.resize(nv);
+    if (m.vdepth.size() < nv) m.vdepth.resize(nv);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t i = r.begin(); i != r.end(); ++i) {
             VertexOut& o = m.verts[i];
             double px, py, z;
-            o.ok = view.project(glm::dvec3(batch.positions[i]), px, py, z) && std::isfinite(px) && std::isfinite(py) &&
-                   std::abs(px) <= kMaxPixel && std::abs(py) <= kMaxPixel;
-            if (!o.ok) continue;
-            o.X = std::llround(px * kSubpixel);
-            o.Y = std::llround(py * kSubpixel);
-            o.z = z;
+            const bool ok = view.project(glm::dvec3(batch.positions[i]), px, py, z) && std::isfinite(px) &&
+                            std::isfinite(py) && std::abs(px) <= kMaxPixel && std::abs(py) <= kMaxPixel;
+            if (!ok) {
+                o.X = kNotProjected;
+                continue;
+            }
+            o.X = static_cast<std::int32_t>(std::llround(px * kSubpixel));
+            o.Y = static_cast<std::int32_t>(std::llround(py * kSubpixel));
+            m.vdepth[i] = z;
         }
     });
     // Pixel centre indices i with (i + 1/2) * 256 in [lo, hi] (fixed point).
@@ -207,6 +245,9 @@ GBufferStats GBufferRaster::draw_clipped(const LightProjection& view, const GBuf
         for (std::size_t c = r.begin(); c != r.end(); ++c) {
             GBufferStats st;   // local: no false sharing between chunks
             std::uint32_t* count = &m.counts[c * bands];
+            // Setups are packed: the band pass then reads only drawable triangles, nearly sequentially
+            // (most triangles of a dense mesh at a coarse grid are not drawable).
+            std::size_t slot = c * kChunk;
             for (std::size_t t = c * kChunk; t < std::min(n, (c + 1) * kChunk); ++t) {
                 ++st.triangles;
                 const glm::uvec3 tri = batch.triangles[t];
@@ -215,7 +256,7 @@ GBufferStats GBufferRaster::draw_clipped(const LightProjection& view, const GBuf
                     continue;
                 }
                 const VertexOut* V[3] = {&m.verts[tri.x], &m.verts[tri.y], &m.verts[tri.z]};
-                if (!V[0]->ok || !V[1]->ok || !V[2]->ok) {
+                if (V[0]->X == kNotProjected || V[1]->X == kNotProjected || V[2]->X == kNotProjected) {
                     ++st.clipped;
                     continue;
                 }
@@ -228,6 +269,30 @@ GBufferStats GBufferRaster::draw_clipped(const LightProjection& view, const GBuf
                 s.y0 = std::max(0, centre_lo(yl));
                 s.y1 = std::min(H - 1, centre_hi(yh));
                 if (s.x0 > s.x1 || s.y0 > s.y1) continue;   // covers no pixel centre of the image
+                for (int k = 0; k < 3; ++k) {
+                    s.X[k] = V[k]->X;
+                    s.Y[k] = V[k]->Y;
+                    s.v[k] = tri[k];
+                }
+                std::int64_t area = edge(s.X[0], s.Y[0], s.X[1], s.Y[1], s.X[2], s.Y[2]);
+                // Degenerate, then (orientation fixed) a small bounding box whose few centres are all
+                // missed (most triangles of a dense mesh at a coarse grid): dropped before the world-space
+                // facing test when nothing is culled (then the statistics are the same in either order),
+                // so such triangles cost no position reads; with culling the cull test counts first.
+                auto screen_reject = [&] {
+                    if (area == 0) {
+                        ++st.culled;
+                        return true;
+                    }
+                    if (area < 0) {
+                        std::swap(s.X[1], s.X[2]);
+                        std::swap(s.Y[1], s.Y[2]);
+                        std::swap(s.v[1], s.v[2]);
+                        area = -area;
+                    }
+                    return (s.x1 - s.x0 + 1) * (s.y1 - s.y0 + 1) <= kFewCentres && !covers_a_centre(s);
+                };
+                if (cull == CullMode::None && screen_reject()) continue;
                 const glm::dvec3 P[3] = {glm::dvec3(batch.positions[tri.x]), glm::dvec3(batch.positions[tri.y]),
                                          glm::dvec3(batch.positions[tri.z])};
                 const glm::dvec3 ng = glm::cross(P[1] - P[0], P[2] - P[0]);
@@ -237,32 +302,16 @@ GBufferStats GBufferRaster::draw_clipped(const LightProjection& view, const GBuf
                     ++st.culled;
                     continue;
                 }
-                for (int k = 0; k < 3; ++k) {
-                    s.X[k] = V[k]->X;
-                    s.Y[k] = V[k]->Y;
-                    s.z[k] = V[k]->z;
-                    s.v[k] = tri[k];
-                }
-                std::int64_t area = edge(s.X[0], s.Y[0], s.X[1], s.Y[1], s.X[2], s.Y[2]);
-                if (area == 0) {
-                    ++st.culled;
-                    continue;
-                }
-                if (area < 0) {
-                    std::swap(s.X[1], s.X[2]);
-                    std::swap(s.Y[1], s.Y[2]);
-                    std::swap(s.z[1], s.z[2]);
-                    std::swap(s.v[1], s.v[2]);
-                    area = -area;
-                }
+                if (cull != CullMode::None && screen_reject()) continue;
+                for (int k = 0; k < 3; ++k) s.z[k] = m.vdepth[s.v[k]];
                 s.inv_area = 1.0 / static_cast<double>(area);
                 s.front = front;
                 const double len = glm::length(ng);
                 s.flat_normal = len > 0.0 ? glm::vec3(ng / len) : glm::vec3(0.0f);
-                m.setups[t] = s;
-                m.valid[t] = 1;
+                m.setups[slot++] = s;
                 for (int b = s.y0 / kBandRows; b <= s.y1 / kBandRows; ++b) ++count[b];
             }
+            m.drawable[c] = static_cast<std::uint32_t>(slot - c * kChunk);
             m.chunk_stats[c] = st;
         }
     });
@@ -271,8 +320,7 @@ GBufferStats GBufferRaster::draw_clipped(const LightProjection& view, const GBuf
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, 1), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t c = r.begin(); c != r.end(); ++c) {
             std::uint32_t* cursor = &m.cursors[c * bands];
-            for (std::size_t t = c * kChunk; t < std::min(n, (c + 1) * kChunk); ++t) {
-                if (!m.valid[t]) continue;
+            for (std::size_t t = c * kChunk; t < c * kChunk + m.drawable[c]; ++t) {
                 const Setup& s = m.setups[t];
                 for (int b = s.y0 / kBandRows; b <= s.y1 / kBandRows; ++b) m.entries[cursor[b]++] = static_cast<std::uint32_t>(t);
             }
@@ -287,6 +335,8 @@ GBufferStats GBufferRaster::draw_clipped(const LightProjection& view, const GBuf
         throw std::invalid_argument("GBufferRaster: front and back targets must both have normals or neither");
     const bool write_normals = !target.normal.empty();
     tbb::parallel_for(tbb::blocked_range<int>(0, bands, 1), [&](const tbb::blocked_range<int>& r) {
+        Span span;
+        const std::int32_t id = batch.id;
         for (int b = r.begin(); b != r.end(); ++b) {
             const int row0 = b * kBandRows, row1 = std::min(H, row0 + kBandRows) - 1;
             std::int64_t fragments = 0;
@@ -309,6 +359,28 @@ GBufferStats GBufferRaster::draw_clipped(const LightProjection& view, const GBuf
                                      static_cast<float>(1.0 / s.z[2])};
                 const float z[3] = {static_cast<float>(s.z[0]), static_cast<float>(s.z[1]), static_cast<float>(s.z[2])};
                 const float inv_area = static_cast<float>(s.inv_area);
+                // Barycentrics (l0, l1) -> perspective-correct weights (l2 completed) and the depth.
+                auto weights = [&](float& l0, float& l1, float& l2) {
+                    l2 = 1.0f - l0 - l1;
+                    if (!perspective) return l0 * z[0] + l1 * z[1] + l2 * z[2];
+                    const float w0 = l0 * iz[0], w1 = l1 * iz[1], w2 = l2 * iz[2];
+                    const float d = 1.0f / (w0 + w1 + w2);
+                    l0 = w0 * d, l1 = w1 * d, l2 = w2 * d;
+                    return d;
+                };
+                auto position_at = [&](float l0, float l1, float l2) { return l0 * P[0] + l1 * P[1] + l2 * P[2]; };
+                // The depth test and the stores of one fragment.
+                auto write = [&](std::size_t i, float d, float l0, float l1, float l2, const glm::vec3& position) {
+                    if (less ? !(d < out.depth[i]) : !(d > out.depth[i])) return;
+                    out.depth[i] = d;
+                    out.position[i] = position;
+                    if (write_normals) {
+                        const glm::vec3 nn = l0 * N[0] + l1 * N[1] + l2 * N[2];
+                        const float len2 = glm::dot(nn, nn);
+                        out.normal[i] = len2 > 0.0f ? nn / std::sqrt(len2) : s.flat_normal;
+                    }
+                    out.id[i] = id;
+                };
                 for (int y = ya; y <= yb; ++y) {
                     const std::int64_t py = (2 * static_cast<std::int64_t>(y) + 1) << (kSubpixelBits - 1);
                     const std::int64_t px0 = (2 * static_cast<std::int64_t>(s.x0) + 1) << (kSubpixelBits - 1);
@@ -317,38 +389,62 @@ GBufferStats GBufferRaster::draw_clipped(const LightProjection& view, const GBuf
                     // The row's covered span, exactly from the integer edge functions: E_k + bias_k >= 0 at
                     // x = x0 + j is E_k + bias_k + j step_k >= 0, a half-line in j (or all / nothing).
                     std::int64_t j_lo = 0, j_hi = s.x1 - s.x0;
-                    for (int k = 0; k < 3; ++k) {
-                        const std::int64_t e0 = E[k] + bias[k], st = step_x[k];
-                        if (st > 0) j_lo = std::max(j_lo, e0 >= 0 ? 0 : floor_div(-e0 + st - 1, st));
-                        else if (st < 0) j_hi = std::min(j_hi, e0 < 0 ? -1 : floor_div(e0, -st));
-                        else if (e0 < 0) j_hi = -1;
+                    if (j_hi < kNarrow) {
+                        // Narrow: walk the few centres (the covered ones form an interval) instead of
+                        // dividing; the same span.
+                        std::int64_t e[3] = {E[0] + bias[0], E[1] + bias[1], E[2] + bias[2]};
+                        const std::int64_t last = j_hi;
+                        j_lo = 0, j_hi = -1;
+                        for (std::int64_t j = 0; j <= last; ++j, e[0] += step_x[0], e[1] += step_x[1], e[2] += step_x[2]) {
+                            if ((e[0] | e[1] | e[2]) < 0) {   // some edge function negative: outside
+                                if (j_hi >= j_lo && j > j_lo) break;
+                                continue;
+                            }
+                            if (j_hi < j_lo) j_lo = j;
+                            j_hi = j;
+                        }
+                    } else {
+                        for (int k = 0; k < 3; ++k) {
+                            const std::int64_t e0 = E[k] + bias[k], st = step_x[k];
+                            if (st > 0) j_lo = std::max(j_lo, e0 >= 0 ? 0 : floor_div(-e0 + st - 1, st));
+                            else if (st < 0) j_hi = std::min(j_hi, e0 < 0 ? -1 : floor_div(e0, -st));
+                            else if (e0 < 0) j_hi = -1;
+                        }
                     }
                     if (j_lo > j_hi) continue;
                     for (int k = 0; k < 3; ++k) E[k] += j_lo * step_x[k];
                     const int xs = s.x0 + static_cast<int>(j_lo), xe = s.x0 + static_cast<int>(j_hi);
-                    for (int x = xs; x <= xe; ++x, E[0] += step_x[0], E[1] += step_x[1], E[2] += step_x[2]) {
-                        ++fragments;
-                        // Barycentrics in float (the edge values are exact integers; float keeps 1e-7).
-                        float l0 = static_cast<float>(E[0]) * inv_area, l1 = static_cast<float>(E[1]) * inv_area;
-                        float l2 = 1.0f - l0 - l1;
-                        float d;
-                        if (perspective) {
-                            const float w0 = l0 * iz[0], w1 = l1 * iz[1], w2 = l2 * iz[2];
-                            d = 1.0f / (w0 + w1 + w2);
-                            l0 = w0 * d, l1 = w1 * d, l2 = w2 * d;
-                        } else {
-                            d = l0 * z[0] + l1 * z[1] + l2 * z[2];
+                    fragments += xe - xs + 1;
+                    if (xe - xs + 1 < kShortSpan) {
+                        for (int x = xs; x <= xe; ++x, E[0] += step_x[0], E[1] += step_x[1]) {
+                            float l0 = static_cast<float>(E[0]) * inv_area, l1 = static_cast<float>(E[1]) * inv_area, l2;
+                            const float d = weights(l0, l1, l2);
+                            write(out.index(x, y), d, l0, l1, l2, position_at(l0, l1, l2));
                         }
-                        const std::size_t i = out.index(x, y);
-                        if (less ? !(d < out.depth[i]) : !(d > out.depth[i])) continue;
-                        out.depth[i] = d;
-                        out.position[i] = l0 * P[0] + l1 * P[1] + l2 * P[2];
-                        if (write_normals) {
-                            const glm::vec3 nn = l0 * N[0] + l1 * N[1] + l2 * N[2];
-                            const float len2 = glm::dot(nn, nn);
-                            out.normal[i] = len2 > 0.0f ? nn / std::sqrt(len2) : s.flat_normal;
+                        continue;
+                    }
+                    // Longer rows in spans of up to kSpan pixels, three loops: the barycentrics from the
+                    // exact integer edge values (scalar: int64 -> float), the interpolation (float only,
+                    // so the compiler vectorises it; the same operations as one pixel at a time), then
+                    // the depth test and the stores.
+                    for (int xc = xs; xc <= xe; xc += kSpan) {
+                        const int count = std::min(kSpan, xe - xc + 1);
+                        for (int j = 0; j < count; ++j, E[0] += step_x[0], E[1] += step_x[1]) {
+                            span.l0[j] = static_cast<float>(E[0]) * inv_area;
+                            span.l1[j] = static_cast<float>(E[1]) * inv_area;
                         }
-                        out.id[i] = batch.id;
+                        for (int j = 0; j < count; ++j) {
+                            float l0 = span.l0[j], l1 = span.l1[j], l2;
+                            span.d[j] = weights(l0, l1, l2);
+                            span.l0[j] = l0, span.l1[j] = l1, span.l2[j] = l2;
+                            span.px[j] = l0 * P[0].x + l1 * P[1].x + l2 * P[2].x;
+                            span.py[j] = l0 * P[0].y + l1 * P[1].y + l2 * P[2].y;
+                            span.pz[j] = l0 * P[0].z + l1 * P[1].z + l2 * P[2].z;
+                        }
+                        const std::size_t i0 = out.index(xc, y);
+                        for (int j = 0; j < count; ++j)
+                            write(i0 + static_cast<std::size_t>(j), span.d[j], span.l0[j], span.l1[j], span.l2[j],
+                                  glm::vec3(span.px[j], span.py[j], span.pz[j]));
                     }
                 }
             }

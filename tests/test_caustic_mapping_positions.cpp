@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <random>
 
 #include "../methods/caustic_mapping/positions_texture.hpp"
 
@@ -82,4 +83,42 @@ TEST(CausticMappingPositions, ExtendLeavesEmptyAndFullTexturesAlone) {
     std::fill(full.id.begin(), full.id.end(), 3);
     extend_positions(full, 8);
     EXPECT_EQ(std::count(full.id.begin(), full.id.end(), 3), 70 * 20);
+}
+
+TEST(CausticMappingPositions, LocateAndSideAgreeWithTheProjection) {
+    // locate() projects with one reciprocal (LightProjection::project divides): the same texel
+    // coordinates up to round-off; side() has the sign of depth(p) - depth(q) wherever they differ
+    // beyond round-off, for a perspective and an orthographic face.
+    Bounds3 b;
+    b.extend({-2.0, -2.0, 0.0});
+    b.extend({2.0, 2.0, 0.5});
+    LightProjection persp;
+    ASSERT_TRUE(fit_perspective({0.6, -0.4, 3.0}, b, 768, 768, persp, 80.0));
+    const LightProjection ortho = fit_orthographic(glm::normalize(glm::dvec3(0.2, 0.1, -1.0)), b, 640, 512);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> u(-2.0, 2.0), h(0.0, 0.5);
+    for (const LightProjection& face : {persp, ortho}) {
+        PositionsTexture tex;
+        tex.faces = {face};
+        int compared = 0;
+        for (int k = 0; k < 2000; ++k) {
+            const glm::dvec3 p(u(rng), u(rng), h(rng)), q(u(rng), u(rng), h(rng));
+            double px = 0, py = 0, depth = 0;
+            ASSERT_TRUE(face.project(p, px, py, depth));
+            Texel t;
+            if (tex.locate(p, t)) {
+                EXPECT_NEAR(t.px, px, 1e-9 * face.width);
+                EXPECT_NEAR(t.py, py, 1e-9 * face.height);
+                EXPECT_EQ(t.depth, depth);
+            } else {
+                EXPECT_FALSE(px >= 0.0 && py >= 0.0 && px <= face.width && py <= face.height) << px << " " << py;
+            }
+            const double diff = tex.depth(p) - tex.depth(q);
+            if (std::abs(diff) < 1e-9) continue;
+            ++compared;
+            EXPECT_EQ(tex.side(p, q) > 0.0, diff > 0.0);
+            EXPECT_EQ(tex.side(p, p), 0.0);
+        }
+        EXPECT_GT(compared, 1900);
+    }
 }

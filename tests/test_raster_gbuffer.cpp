@@ -148,6 +148,54 @@ TEST(GBufferRaster, JitteredMeshCoversEveryCentreOnce) {
         }
 }
 
+TEST(GBufferRaster, SubPixelTrianglesCoverEveryCentreOnce) {
+    // Triangles much smaller than a pixel (the setup pass tests their few centres itself): a grid of
+    // half-pixel quads whose vertices lie on pixel centres and corners (edges through centres: the
+    // top-left rule decides), then the same grid with jittered interior vertices. Each centre inside
+    // the mesh is covered by exactly one triangle, drawn one by one and as one batch.
+    const int W = 16, H = 16, n = 24;
+    const LightProjection v = pixel_view(W, H);
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> jitter(-0.2, 0.2);
+    for (const bool jittered : {false, true}) {
+        std::vector<glm::vec3> pos;
+        for (int j = 0; j <= n; ++j)
+            for (int i = 0; i <= n; ++i) {
+                double x = 2.0 + 0.5 * i, y = 2.0 + 0.5 * j;
+                if (jittered && i > 0 && i < n && j > 0 && j < n) x += jitter(rng), y += jitter(rng);
+                pos.push_back(at_pixel(x, y, H));
+            }
+        std::vector<glm::uvec3> tris;
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i) {
+                const unsigned a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
+                tris.push_back({a, b, d});
+                tris.push_back({a, d, c});
+            }
+        std::vector<int> hits(static_cast<std::size_t>(W) * H, 0);
+        GBufferRaster raster;
+        GBuffer g;
+        for (const glm::uvec3& tri : tris) {
+            const std::vector<glm::uvec3> one = {tri};
+            g.clear(W, H);
+            raster.draw(v, {pos, {}, one, 0}, CullMode::None, DepthTest::Less, g);
+            for (std::size_t k = 0; k < hits.size(); ++k) hits[k] += g.id[k] >= 0;
+        }
+        g.clear(W, H);
+        const GBufferStats st = raster.draw(v, {pos, {}, tris, 0}, CullMode::None, DepthTest::Less, g);
+        int inside_centres = 0;
+        for (int y = 0; y < H; ++y)
+            for (int x = 0; x < W; ++x) {
+                const bool inside = x + 0.5 > 2.0 && x + 0.5 < 14.0 && y + 0.5 > 2.0 && y + 0.5 < 14.0;
+                inside_centres += inside;
+                const std::size_t k = static_cast<std::size_t>(y) * W + x;
+                EXPECT_EQ(hits[k], inside ? 1 : 0) << jittered << ": " << x << "," << y;
+                EXPECT_EQ(g.id[k] >= 0, inside) << jittered << ": " << x << "," << y;
+            }
+        EXPECT_EQ(st.fragments, inside_centres) << jittered;
+    }
+}
+
 TEST(GBufferRaster, DepthTestCullingAndPerspectiveAttributes) {
     const int W = 32, H = 32;
     const LightProjection v = pixel_view(W, H);

@@ -6,6 +6,8 @@
 //   bool fetch(const glm::dvec3& p, glm::dvec3& q) const;   // stored surface point along p's light ray;
 //                                                          // false: the paper's null value
 //   double depth(const glm::dvec3& p) const;                // light-view depth (side tests)
+// and optionally
+//   double side(const glm::dvec3& p, const glm::dvec3& q) const;   // the sign of depth(p) - depth(q)
 // and the ray is v + d r (r unit). f(d) = |P(d) - fetch(P(d))| (Eq. 3) vanishes at the intersection;
 // side(d) = depth(P) - depth(fetch(P)) is its signed counterpart (< 0: in front of the surface seen
 // from the light, > 0: behind it), used to keep a bracket [lo, hi] for the bisection safeguard and to
@@ -71,7 +73,8 @@ EstimateResult estimate_intersection(const Lookup& tex, const glm::dvec3& v, con
         const glm::dvec3 p = v + dd * r;
         ++out.lookups;
         if (!tex.fetch(p, qq)) return false;
-        side = tex.depth(p) - tex.depth(qq);
+        if constexpr (requires { tex.side(p, qq); }) side = tex.side(p, qq);
+        else side = tex.depth(p) - tex.depth(qq);
         if (side < 0.0) lo = std::max(lo, dd);
         else if (side > 0.0) hi = std::min(hi, dd);
         return true;

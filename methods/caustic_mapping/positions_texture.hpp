@@ -93,7 +93,19 @@ struct PositionsTexture {
     bool locate(const glm::dvec3& p, Texel& t) const {
         t.face = cube ? cube_face_of(p - faces[0].eye) : 0;
         const LightProjection& f = faces[static_cast<std::size_t>(t.face)];
-        if (!f.project(p, t.px, t.py, t.depth)) return false;
+        // LightProjection::project with one reciprocal instead of four divisions on the point's path (the
+        // scales do not depend on p): the estimator's lookups are dominated by this chain's latency.
+        const glm::dvec3 d = p - f.eye;
+        t.depth = glm::dot(d, f.forward);
+        double x = glm::dot(d, f.right), y = glm::dot(d, f.up);
+        if (f.type == ProjectionType::Perspective) {
+            if (!(t.depth > f.near_depth)) return false;
+            const double inv_depth = 1.0 / t.depth;
+            x *= inv_depth;
+            y *= inv_depth;
+        }
+        t.px = (x - f.x0) * (f.width / (f.x1 - f.x0));
+        t.py = (f.y1 - y) * (f.height / (f.y1 - f.y0));
         if (!(t.px >= 0.0 && t.py >= 0.0 && t.px <= f.width && t.py <= f.height)) return false;
         return true;
     }
@@ -137,6 +149,14 @@ struct PositionsTexture {
     double depth(const glm::dvec3& p) const {
         const LightProjection& f = faces[0];
         return f.type == ProjectionType::Perspective ? glm::length(p - f.eye) : glm::dot(p - f.eye, f.forward);
+    }
+    // A value with the sign of depth(p) - depth(q), which is all the estimator uses of it: in perspective
+    // the difference of squared radial distances (no square roots).
+    double side(const glm::dvec3& p, const glm::dvec3& q) const {
+        const LightProjection& f = faces[0];
+        if (f.type != ProjectionType::Perspective) return depth(p) - depth(q);
+        const glm::dvec3 dp = p - f.eye, dq = q - f.eye;
+        return glm::dot(dp, dp) - glm::dot(dq, dq);
     }
 };
 
