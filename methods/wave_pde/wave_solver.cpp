@@ -40,30 +40,10 @@ template <bool Clamp, bool Accumulate>
                          const float* __restrict l, std::int64_t& clamped) {
     std::uint32_t top = 0;
     std::int64_t negative = 0;
-    // The x faces, scalar: the neighbour outside the grid is zero, the cell itself (mirror) or the
-    // opposite end of the row (periodic).
-    auto edge = [&](int i, float left, float right) {
+    // One cell, with its x neighbours `left` and `right` (at the x faces: zero, the cell itself for
+    // mirror, the opposite end of the row for periodic).
+    auto cell = [&](int i, float left, float right) {
         const float lap = left + right + ym[i] + yp[i] + zm[i] + zp[i] - 6.0f * c[i];
-        float next = a[i] * c[i] - b[i] * p[i] + l[i] * lap;
-        if constexpr (Accumulate) acc[i] += c[i] + p[i];
-        if constexpr (Clamp) {
-            negative += next < 0.0f;
-            next = next < 0.0f ? 0.0f : next;
-        }
-        p[i] = next;
-        top = std::max(top, abs_bits(next));
-    };
-    const float outside_left = sides == Sides::Zero ? 0.0f : sides == Sides::Mirror ? c[0] : c[n - 1];
-    const float outside_right = sides == Sides::Zero ? 0.0f : sides == Sides::Mirror ? c[n - 1] : c[0];
-    if (n == 1) {
-        edge(0, outside_left, outside_right);
-        clamped += negative;
-        return top;
-    }
-    edge(0, outside_left, c[1]);
-    // The interior of the row: branch-free and vectorised.
-    for (int i = 1; i + 1 < n; ++i) {
-        const float lap = c[i - 1] + c[i + 1] + ym[i] + yp[i] + zm[i] + zp[i] - 6.0f * c[i];
         float next = a[i] * c[i] - b[i] * p[i] + l[i] * lap;
         if constexpr (Accumulate) acc[i] += c[i] + p[i];
         if constexpr (Clamp) {
@@ -73,8 +53,17 @@ template <bool Clamp, bool Accumulate>
         p[i] = next;
         const std::uint32_t bits = abs_bits(next);
         top = top > bits ? top : bits;
+    };
+    const float outside_left = sides == Sides::Zero ? 0.0f : sides == Sides::Mirror ? c[0] : c[n - 1];
+    const float outside_right = sides == Sides::Zero ? 0.0f : sides == Sides::Mirror ? c[n - 1] : c[0];
+    if (n == 1) {
+        cell(0, outside_left, outside_right);
+        clamped += negative;
+        return top;
     }
-    edge(n - 1, c[n - 2], outside_right);
+    cell(0, outside_left, c[1]);
+    for (int i = 1; i + 1 < n; ++i) cell(i, c[i - 1], c[i + 1]);   // branch-free: vectorised
+    cell(n - 1, c[n - 2], outside_right);
     clamped += negative;
     return top;
 }
