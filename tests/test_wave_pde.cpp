@@ -402,10 +402,10 @@ TEST(WaveMethod, HardCasesStayFinite) {
 }
 
 TEST(WaveMethod, ArrivalStopKeepsTheDirectFrontOnAFlatInterface) {
-    // d'Alembert: the flat sheet splits into two half pulses; the downward one (area sqrt(2 pi) / 2 per
-    // column) passes at courant cells per step, so once it has passed a cell (margin 6: the sheet's
+    // d'Alembert: the flat Gaussian sheet (init=smooth) splits into two half pulses; the downward one
+    // (area sqrt(2 pi) / 2 per column) passes at courant cells per step, so once it has passed a cell (margin 6: the sheet's
     // half-width and the scheme's dispersive tail) the cell's sum is sqrt(2 pi) / (2 courant), at every
-    // depth. At the default margin the floor is uniform. stop=epsilon sums to the harmonic limit instead.
+    // depth. At the default margin (3) the floor is uniform. stop=epsilon sums to the harmonic limit instead.
     HeightFieldDesc flat;
     flat.size = glm::dvec2(2.0);
     flat.resolution = glm::ivec2(64);
@@ -421,15 +421,20 @@ TEST(WaveMethod, ArrivalStopKeepsTheDirectFrontOnAFlatInterface) {
             for (int x = w / 3; x < 2 * w / 3; ++x) v.push_back(out.receiver.pixels[y * w + x]);
         return v;
     };
-    const CausticOutput passed = render(scene, {{"grid", "32"}, {"normalize", "raw"}, {"margin", "6"}}, "flat, margin 6");
+    const CausticOutput passed = render(scene, {{"grid", "32"}, {"normalize", "raw"}, {"init", "smooth"}, {"margin", "6"}}, "flat, margin 6");
     for (float v : middle(passed)) EXPECT_NEAR(v, expected, 0.02 * expected);
-    const CausticOutput standard = render(scene, {{"grid", "32"}, {"normalize", "raw"}}, "flat, default");
+    const CausticOutput standard = render(scene, {{"grid", "32"}, {"normalize", "raw"}, {"init", "smooth"}}, "flat, margin 3");
     const std::vector<float> floor = middle(standard);
     const auto [lo, hi] = std::minmax_element(floor.begin(), floor.end());
     EXPECT_LT(*hi - *lo, 0.01 * *hi);
-    const CausticOutput converged = render(scene, {{"grid", "32"}, {"normalize", "raw"}, {"stop", "epsilon"}}, "flat, epsilon");
+    // The defaults (init=cells, margin 3): uniform too.
+    const std::vector<float> defaults = middle(render(scene, {{"grid", "32"}, {"normalize", "raw"}}, "flat, defaults"));
+    const auto [dlo, dhi] = std::minmax_element(defaults.begin(), defaults.end());
+    EXPECT_GT(*dlo, 0.0f);
+    EXPECT_LT(*dhi - *dlo, 0.01 * *dhi);
+    const CausticOutput converged = render(scene, {{"grid", "32"}, {"normalize", "raw"}, {"init", "smooth"}, {"stop", "epsilon"}}, "flat, epsilon");
     const std::size_t centre = passed.receiver.pixels.size() / 2 + passed.receiver.width / 2;
-    std::printf("flat floor: margin 6 %.4f (expected %.4f), default %.4f, epsilon %.4f\n", passed.receiver.pixels[centre],
+    std::printf("flat floor: margin 6 %.4f (expected %.4f), margin 3 %.4f, epsilon %.4f\n", passed.receiver.pixels[centre],
                 expected, standard.receiver.pixels[centre], converged.receiver.pixels[centre]);
     EXPECT_LT(converged.receiver.pixels[centre], 0.5 * expected);
 }
