@@ -17,12 +17,12 @@ bool VolumeShape::contains(const glm::dvec3& p) const {
            p.z <= hi.z;
 }
 
-VolumeShape VolumeShape::padded(int cells) const {
+VolumeShape VolumeShape::padded(int lateral, int vertical) const {
     VolumeShape s = *this;
-    s.origin -= glm::dvec3(cells * spacing);
-    s.nx += 2 * cells;
-    s.ny += 2 * cells;
-    s.nz += 2 * cells;
+    s.origin -= spacing * glm::dvec3(lateral, lateral, vertical);
+    s.nx += 2 * lateral;
+    s.ny += 2 * lateral;
+    s.nz += 2 * vertical;
     return s;
 }
 

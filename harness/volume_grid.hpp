@@ -32,8 +32,9 @@ struct VolumeShape {
     glm::dvec3 extent() const { return spacing * glm::dvec3(nx, ny, nz); }
     // Inside the box [origin, origin + extent] (closed).
     bool contains(const glm::dvec3& p) const;
-    // The centred sub-box grown by `cells` on every side (new origin, same spacing).
-    VolumeShape padded(int cells) const;
+    // The box grown by `lateral` cells on its x and y faces and `vertical` on its z faces (new origin,
+    // same spacing).
+    VolumeShape padded(int lateral, int vertical) const;
 };
 
 template <class T>

@@ -2,13 +2,13 @@
 #include "volume_lookup.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <optional>
 
 #include <tbb/parallel_for.h>
 
 #include "receiver_chart.hpp"
+#include "timing.hpp"
 
 namespace caustics {
 
@@ -47,13 +47,16 @@ struct LookupContext {
     double depth_scale = 1.0;
 };
 
+// Length of the mean refracted ray from the mean water surface down to p.
+double path_below_surface(const LookupContext& ctx, const glm::dvec3& p) {
+    return (ctx.lookup->surface_z - p.z) / std::max(-ctx.refracted.z, 1e-6);
+}
+
 // Whether light reaches p through the water's rectangle along the mean refracted direction.
 bool lit(const LookupContext& ctx, const glm::dvec3& p) {
     const VolumeLookup& l = *ctx.lookup;
     if (!(l.water_hi.x > l.water_lo.x && l.water_hi.y > l.water_lo.y)) return true;
-    const glm::dvec3& t = ctx.refracted;
-    const double along = (l.surface_z - p.z) / std::max(-t.z, 1e-6);
-    const glm::dvec2 entry = glm::dvec2(p) - along * glm::dvec2(t);
+    const glm::dvec2 entry = glm::dvec2(p) - path_below_surface(ctx, p) * glm::dvec2(ctx.refracted);
     return entry.x >= l.water_lo.x && entry.x <= l.water_hi.x && entry.y >= l.water_lo.y && entry.y <= l.water_hi.y;
 }
 
@@ -78,20 +81,14 @@ bool lookup_value(const LookupContext& ctx, glm::dvec3 p, float& value, bool& cl
         return true;
     }
     if (ctx.lookup->scaled_ior) {
-        const glm::dvec3& t = ctx.refracted;
-        const double along = (ctx.lookup->surface_z - p.z) / std::max(-t.z, 1e-6);  // path below the surface
-        glm::dvec3 q = p - along * t;                                          // entry point on the surface
+        const double along = path_below_surface(ctx, p);
+        glm::dvec3 q = p - along * ctx.refracted;   // entry point on the surface
         q.z = ctx.lookup->surface_z - along * ctx.depth_scale;
-        const glm::dvec3 lo = s.origin, hi = s.origin + s.extent();
         const glm::dvec3 qc = glm::clamp(q, lo, hi);
         clamped = qc != q;
         p = qc;
     }
     return trilinear(*ctx.lookup->texture, p, value);
-}
-
-double elapsed_ms(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
 }  // namespace
@@ -104,7 +101,7 @@ CausticOutput render_volume_texture(const FrameGeometry& frame, const RenderRequ
     ctx.depth_scale = (lookup.ior - 1.0) / lookup.ior;
     std::int64_t outside = 0, clamped = 0, nonfinite = 0;
 
-    auto t0 = std::chrono::steady_clock::now();
+    Stopwatch watch;
     std::optional<ReceiverChart> own_chart;
     const ReceiverChart* chart = request.receiver;
     if (!chart && lookup.normalize_flux) {
@@ -131,13 +128,13 @@ CausticOutput render_volume_texture(const FrameGeometry& frame, const RenderRequ
             clamped += row_clamped[j];
         }
     }
-    out.stages_ms.emplace_back("receiver_lookup", elapsed_ms(t0));
+    out.stages_ms.emplace_back("receiver_lookup", watch.ms());
 
     // Flux normalization: the area-weighted mean over the receiver equals the irradiance a flat
     // interface would transmit onto it (from the light and the interface only, never the reference).
     double scale = 1.0;
     if (lookup.normalize_flux && chart) {
-        t0 = std::chrono::steady_clock::now();
+        watch.reset();
         double sum = 0.0, target = 0.0, area = 0.0;
         for (int j = 0; j < chart->height(); ++j)
             for (int i = 0; i < chart->width(); ++i) {
@@ -150,7 +147,7 @@ CausticOutput render_volume_texture(const FrameGeometry& frame, const RenderRequ
                 area += a;
             }
         if (sum > 0.0 && area > 0.0) scale = target / sum;
-        out.stages_ms.emplace_back("normalize", elapsed_ms(t0));
+        out.stages_ms.emplace_back("normalize", watch.ms());
     }
     if (request.receiver) {
         for (float& v : receiver.pixels) {
@@ -164,7 +161,7 @@ CausticOutput render_volume_texture(const FrameGeometry& frame, const RenderRequ
     }
 
     if (request.camera) {
-        t0 = std::chrono::steady_clock::now();
+        watch.reset();
         const CameraGBuffer& gb = *request.camera;
         out.camera = Image(gb.width, gb.height, 1);
         std::vector<std::int64_t> row_outside(static_cast<std::size_t>(std::max(gb.height, 0))), row_clamped(row_outside.size()),
@@ -190,7 +187,7 @@ CausticOutput render_volume_texture(const FrameGeometry& frame, const RenderRequ
             clamped += row_clamped[y];
             nonfinite += row_nonfinite[y];
         }
-        out.stages_ms.emplace_back("camera_lookup", elapsed_ms(t0));
+        out.stages_ms.emplace_back("camera_lookup", watch.ms());
     }
     out.health.add("outside_volume", outside);
     out.health.add("clamped", clamped);

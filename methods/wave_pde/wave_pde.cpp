@@ -107,11 +107,7 @@ public:
         // The damping band pads the z faces always, the x and y faces only where they are not mirror
         // or periodic.
         const int pad_xy = settings.sides == wave::Sides::Zero ? settings.sponge : 0, pad_z = settings.sponge;
-        VolumeShape full = interior;
-        full.nx += 2 * pad_xy;
-        full.ny += 2 * pad_xy;
-        full.nz += 2 * pad_z;
-        full.origin -= interior.spacing * glm::dvec3(pad_xy, pad_xy, pad_z);
+        const VolumeShape full = interior.padded(pad_xy, pad_z);
 
         Stopwatch watch;
         wave::Simulation sim(full, settings);
