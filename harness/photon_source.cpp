@@ -80,7 +80,8 @@ Emitter make_emitter(const Light& light, const FrameGeometry& frame) {
     return e;
 }
 
-void photon_batch_order(std::uint64_t seed, std::uint64_t lights, std::uint64_t first, std::uint64_t last,
+void photon_batch_order(std::uint64_t lights, std::uint64_t first, std::uint64_t last,
+                        const std::function<void(std::uint64_t, double&, double&)>& emission,
                         std::vector<std::uint32_t>& order, std::vector<std::uint32_t>& scratch) {
     const std::size_t n = static_cast<std::size_t>(last - first);
     constexpr std::size_t kCells = 65536;
@@ -91,8 +92,8 @@ void photon_batch_order(std::uint64_t seed, std::uint64_t lights, std::uint64_t 
     std::uint32_t* count = tmp + n;
     std::fill(count, count + kCells + 1, 0u);
     for (std::size_t i = 0; i < n; ++i) {
-        PhotonRandom rng(seed, first + i);
-        const double u1 = rng.next(), u2 = rng.next();
+        double u1, u2;
+        emission(first + i, u1, u2);
         key[i] = morton2(static_cast<std::uint32_t>(u1 * 256.0), static_cast<std::uint32_t>(u2 * 256.0));
         ++count[key[i] + 1];
     }

@@ -1,9 +1,10 @@
 #pragma once
-// Where the reference's photons come from (DESIGN.md section 5): counter-based random numbers, the
-// emitters of directional and point lights, and the order in which each batch of photons is traced.
-// Split from reference.cpp; everything here is deterministic in (seed, photon index).
+// Where the reference's photons come from (DESIGN.md section 5): the emitters of directional and point
+// lights, and the order in which each batch of photons is traced (the sample values themselves come
+// from photon_sampler.hpp). Split from reference.cpp; everything here is deterministic.
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <numbers>
 #include <vector>
 
@@ -14,22 +15,6 @@
 #include "scene.hpp"
 
 namespace caustics {
-
-// Counter-based random numbers: value (seed, photon, dimension) -> [0, 1). mix64 is a bijection, so
-// distinct photons get distinct, decorrelated states.
-class PhotonRandom {
-public:
-    PhotonRandom(std::uint64_t seed, std::uint64_t photon)
-        : state_(mix64(mix64(seed) + photon * 0xD1B54A32D192ED03ull)) {}
-    double next() {
-        const std::uint64_t h = mix64(state_ + (++dimension_) * 0x9E3779B97F4A7C15ull);
-        return static_cast<double>(h >> 11) * 0x1.0p-53;
-    }
-
-private:
-    std::uint64_t state_;
-    std::uint64_t dimension_ = 0;
-};
 
 // Duff et al. 2017, "Building an Orthonormal Basis, Revisited": a and b complete the unit vector n.
 void orthonormal_basis(const glm::dvec3& n, glm::dvec3& a, glm::dvec3& b);
@@ -64,14 +49,15 @@ struct Emitter {
 Emitter make_emitter(const Light& light, const FrameGeometry& frame);
 
 // The order in which the photons [first, last) of one batch are traced: grouped by light and then along
-// a Z-order curve over a 256 x 256 grid of their two emission random numbers, so that consecutive
-// photons start close together and take similar paths (coherent BVH traversal, height-field and
-// accumulator accesses). Every photon's random numbers depend only on its index, and deposits are
-// integer sums, so the order changes nothing but the round-off of the batch's flux ledger; it is a fixed
-// function of the batch (stable counting sorts), so results stay independent of the thread count.
-// `lights` is the number of emitters (photon k belongs to light k mod lights). `order` receives photon
-// offsets k - first; `scratch` holds keys.
-void photon_batch_order(std::uint64_t seed, std::uint64_t lights, std::uint64_t first, std::uint64_t last,
+// a Z-order curve over a 256 x 256 grid of their two emission sample values (`emission(k, u1, u2)`), so
+// that consecutive photons start close together and take similar paths (coherent BVH traversal,
+// height-field and accumulator accesses). Every photon's sample values depend only on its index, and
+// deposits are integer sums, so the order changes nothing but the round-off of the batch's flux ledger;
+// it is a fixed function of the batch (stable counting sorts), so results stay independent of the
+// thread count. `lights` is the number of emitters (photon k belongs to light k mod lights). `order`
+// receives photon offsets k - first; `scratch` holds keys.
+void photon_batch_order(std::uint64_t lights, std::uint64_t first, std::uint64_t last,
+                        const std::function<void(std::uint64_t, double&, double&)>& emission,
                         std::vector<std::uint32_t>& order, std::vector<std::uint32_t>& scratch);
 
 }  // namespace caustics

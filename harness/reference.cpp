@@ -1,20 +1,21 @@
 // The reference light tracer (DESIGN.md section 5). See reference.hpp for the contract.
 //
-// Determinism: photon k draws its random numbers only from a counter-based generator keyed by
-// (seed, k, dimension); deposits are summed as 64-bit fixed-point integers (associative), photons are
-// traced in a fixed order within each fixed batch (batch_order), and the flux ledger is summed per fixed
-// chunk of that order, then over chunks and batches in order. The result is
-// therefore bit-identical for any thread count and scheduling.
+// Determinism: photon (replica r, index i) draws its sample values only from PhotonSampler(seed, r, i);
+// deposits are summed as 64-bit fixed-point integers (associative), photons are traced in a fixed order
+// within each fixed batch (batch_order), and the flux ledger is summed per fixed chunk of that order,
+// then over chunks and batches in order. The result is therefore bit-identical for any thread count
+// and scheduling, and the bin sums of a reference extended with more photons equal those of one
+// computed at once.
 //
-// Noise: photon k contributes X_k = N w_k / A to the bin it lands in (0 elsewhere); E = mean(X_k) and
-// se^2 = (sum X_k^2 / N - E^2) / (N - 1). One photon deposits at most once (it stops at the first
-// diffuse surface, and Fresnel splitting is done by Russian roulette), so per-bin sums of w and w^2
-// are exactly the needed moments.
+// Noise: replica r gives E_r = (scale L / n) sum_{its photons in the bin} q / A, an unbiased estimate
+// of E_c from its n photons; E = mean(E_r) and se^2 = sum (E_r - E)^2 / (R (R - 1)). The points within
+// one replica are dependent (quasi-Monte Carlo), the replicas are independent randomizations.
 //
 // Bump kReferenceVersion (reference_cache.cpp) whenever the transport or the estimators change.
 #include "reference.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <array>
 #include <chrono>
 #include <cmath>
@@ -29,6 +30,7 @@
 #include <tbb/task_arena.h>
 
 #include "hash.hpp"
+#include "photon_sampler.hpp"
 #include "photon_source.hpp"
 #include "progress.hpp"
 #include "ray_offset.hpp"
@@ -41,8 +43,8 @@ namespace {
 constexpr std::uint64_t kBatchSize = 65536;
 // Photons of one batch traced as one task (and summed into one partial ledger), in the batch's order.
 constexpr std::size_t kChunkSize = 2048;
-// One photon's normalised weight (<= 1) becomes an integer of at most 2^30: 1e9 photons in one bin
-// stay below 2^60, and each contribution keeps ~2^-30 relative precision.
+// One photon's normalised weight q (<= 1) becomes an integer of at most 2^30: 1e9 photons in one bin of
+// one replica stay below 2^60, and each contribution keeps ~2^-30 relative precision.
 constexpr double kFixedScale = 1073741824.0;  // 2^30
 
 // Unpolarised Fresnel reflectance of a dielectric interface.
@@ -70,12 +72,12 @@ struct RayRecorder {
     }
 };
 
-// Per bin / pixel: {sum of q, sum of q^2 / 2^30}, interleaved so that one deposit touches one cache line.
-using FixedPair = std::array<std::int64_t, 2>;
-
+// Per replica, bin / pixel: the sum of round(2^30 q). A batch belongs to one replica, so a thread adds
+// into the slice of the replica it is tracing (`replica` offsets).
 struct Accumulators {
-    std::vector<FixedPair> bins;     // receiver
-    std::vector<FixedPair> pixels;   // camera
+    std::vector<std::int64_t> bins;     // receiver, replica-major
+    std::vector<std::int64_t> pixels;   // camera, replica-major
+    std::size_t bin_offset = 0, pixel_offset = 0;
 };
 
 // What a camera deposit needs of one pixel, packed so that it costs one cache miss: the pixel's
@@ -95,20 +97,31 @@ struct Transport {
     std::vector<double> pixel_scale;   // camera: d_c^2 / cos_c of each pixel's G-buffer point
     std::vector<PixelInfo> pixel_info; // camera: pixel_scale and G-buffer object, packed
     std::vector<Emitter> emitters;
-    std::vector<std::uint64_t> photons_of_light;
-    double weight_ref = 1.0;           // largest flux per photon: normalises fixed-point weights
+    std::vector<double> start_weight;  // q of a photon of each light as it leaves (power / largest power)
+    double scale = 1.0;                // the largest light's power [W]: converts q sums to flux
     double outside_ior = 1.0;
     int receiver_object = -1;
     int max_depth = 8;
     bool fresnel = false;
     std::uint64_t seed = 1;
+    SamplerKind sampler = SamplerKind::Sobol;
 
-    void batch_order(std::uint64_t first, std::uint64_t last, std::vector<std::uint32_t>& order,
+    // Photon i of a replica belongs to light i mod L and is that light's sample i / L.
+    PhotonSampler sampler_of(std::uint32_t replica, std::uint64_t i) const {
+        return PhotonSampler(sampler, seed + 0x51ED270B27D5A3C1ull * (i % emitters.size()), replica, i / emitters.size());
+    }
+    void batch_order(std::uint32_t replica, std::uint64_t first, std::uint64_t last, std::vector<std::uint32_t>& order,
                      std::vector<std::uint32_t>& scratch) const {
-        photon_batch_order(seed, emitters.size(), first, last, order, scratch);
+        photon_batch_order(
+            emitters.size(), first, last,
+            [&](std::uint64_t i, double& u1, double& u2) {
+                const PhotonSampler s = sampler_of(replica, i);
+                u1 = s.get(0), u2 = s.get(1);
+            },
+            order, scratch);
     }
     template <class Log>
-    void trace(std::uint64_t k, FluxLedger& ledger, Accumulators& acc, Log& log) const;
+    void trace(std::uint32_t replica, std::uint64_t i, FluxLedger& ledger, Accumulators& acc, Log& log) const;
     // The pixel a deposit at p would land in, or -1 (outside the image or behind the camera).
     std::ptrdiff_t camera_pixel(const glm::dvec3& p) const;
     template <class Log>
@@ -126,22 +139,21 @@ void add_ledger(FluxLedger& sum, const FluxLedger& l) {
     sum.truncated += l.truncated;
 }
 
-void add_fixed(FixedPair& acc, double x) {
+void add_fixed(std::int64_t& acc, double x) {
     // x >= 0: adding 1/2 and truncating rounds to nearest, without a libm call.
-    acc[0] += static_cast<std::int64_t>(x * kFixedScale + 0.5);
-    acc[1] += static_cast<std::int64_t>(x * x * kFixedScale + 0.5);
+    acc += static_cast<std::int64_t>(x * kFixedScale + 0.5);
 }
 
 template <class Log>
-void Transport::trace(std::uint64_t k, FluxLedger& ledger, Accumulators& acc, Log& log) const {
-    PhotonRandom rng(seed, k);
-    const std::size_t light = emitters.size() == 1 ? 0 : static_cast<std::size_t>(k % emitters.size());
+void Transport::trace(std::uint32_t replica, std::uint64_t i, FluxLedger& ledger, Accumulators& acc, Log& log) const {
+    const PhotonSampler rng = sampler_of(replica, i);
+    const std::size_t light = emitters.size() == 1 ? 0 : static_cast<std::size_t>(i % emitters.size());
     const Emitter& emitter = emitters[light];
     glm::dvec3 origin, dir;
-    const double u1 = rng.next(), u2 = rng.next();
-    emitter.sample(u1, u2, origin, dir);
-    const double u_dispersion = rng.next();
-    double w = emitter.flux_per_photon;
+    emitter.sample(rng.get(0), rng.get(1), origin, dir);
+    const double u_dispersion = rng.get(2);
+    int next_dim = 3;   // Fresnel choices take dimensions 3, 4, ... in order of the events
+    double w = start_weight[light];
     ledger.emitted += w;
 
     const auto& objects = frame->scene->objects;
@@ -175,13 +187,13 @@ void Transport::trace(std::uint64_t k, FluxLedger& ledger, Accumulators& acc, Lo
                 pixel = camera_pixel(hit.position);
                 if (pixel >= 0) {
                     __builtin_prefetch(&pixel_info[static_cast<std::size_t>(pixel)]);
-                    __builtin_prefetch(&acc.pixels[static_cast<std::size_t>(pixel)], 1);
+                    __builtin_prefetch(&acc.pixels[acc.pixel_offset + static_cast<std::size_t>(pixel)], 1);
                 }
             }
             if (hit.object == receiver_object) {
                 ledger.deposited_receiver += w;
                 const int bin = chart->bin_of(hit.position);
-                if (bin >= 0) add_fixed(acc.bins[static_cast<std::size_t>(bin)], w / weight_ref);
+                if (bin >= 0) add_fixed(acc.bins[acc.bin_offset + static_cast<std::size_t>(bin)], w);
             } else {
                 ledger.deposited_other += w;
             }
@@ -219,7 +231,7 @@ void Transport::trace(std::uint64_t k, FluxLedger& ledger, Accumulators& acc, Lo
         if (!reflect) {
             cos_t = std::sqrt(1.0 - sin2_t);
             // Fresnel by Russian roulette: unbiased and flux conserving, one path per photon.
-            if (fresnel) reflect = rng.next() < fresnel_reflectance(cos_i, cos_t, n_i, n_t);
+            if (fresnel) reflect = rng.get(next_dim++) < fresnel_reflectance(cos_i, cos_t, n_i, n_t);
         }
         dir = reflect ? reflected : eta * dir + (eta * cos_i - cos_t) * n;
         dir = glm::normalize(dir);
@@ -254,9 +266,9 @@ void Transport::deposit_camera(const Hit& hit, std::size_t index, const glm::dve
     log.ray(hit.position, to_camera, 0.0, dist * (1.0 - 1e-6), true);
     if (tracer->occluded(hit.position, to_camera, 0.0, dist * (1.0 - 1e-6))) return;
     // E_pixel += w / A_pix with A_pix = omega d^2 / cos; stored relative to the pixel's own G-buffer
-    // footprint so the fixed-point value stays near w / weight_ref.
-    const double x = (w / weight_ref) * pixel.scale * cos_c / (dist * dist);
-    add_fixed(acc.pixels[index], x);
+    // footprint so the fixed-point value stays near q.
+    const double x = w * pixel.scale * cos_c / (dist * dist);
+    add_fixed(acc.pixels[acc.pixel_offset + index], x);
 }
 
 double nrmse_of(const Image& e, const Image& se, const std::vector<std::uint8_t>* mask) {
@@ -277,7 +289,6 @@ Transport make_transport(const RayTracer& tracer, const ReceiverChart& chart, co
                          const ReferenceSettings& settings, std::unique_ptr<CameraModel>& camera_model) {
     const FrameGeometry& frame = tracer.frame();
     const Scene& scene = *frame.scene;
-    const std::uint64_t photons = settings.photons;
     const bool camera_view = camera != nullptr;
     Transport transport;
     transport.tracer = &tracer;
@@ -287,19 +298,15 @@ Transport make_transport(const RayTracer& tracer, const ReceiverChart& chart, co
     transport.max_depth = scene.max_specular_depth;
     transport.fresnel = scene.fresnel;
     transport.seed = settings.seed;
+    transport.sampler = settings.sampler;
     transport.outside_ior = scene.medium.present ? scene.medium.ior : 1.0;
-    const std::size_t lights = scene.lights.size();
-    transport.weight_ref = 0.0;
-    for (std::size_t l = 0; l < lights; ++l) {
-        Emitter e = make_emitter(scene.lights[l], frame);
-        // Photon k belongs to light k mod L.
-        const std::uint64_t count = photons / lights + (l < photons % lights ? 1 : 0);
-        e.flux_per_photon = count > 0 ? e.power / static_cast<double>(count) : 0.0;
-        transport.weight_ref = std::max(transport.weight_ref, e.flux_per_photon);
-        transport.emitters.push_back(e);
-        transport.photons_of_light.push_back(count);
+    transport.scale = 0.0;
+    for (const Light& light : scene.lights) {
+        transport.emitters.push_back(make_emitter(light, frame));
+        transport.scale = std::max(transport.scale, transport.emitters.back().power);
     }
-    if (!(transport.weight_ref > 0.0)) transport.weight_ref = 1.0;
+    if (!(transport.scale > 0.0)) transport.scale = 1.0;
+    for (const Emitter& e : transport.emitters) transport.start_weight.push_back(e.power / transport.scale);
 
     if (camera_view) {
         camera_model = std::make_unique<CameraModel>(scene.camera);
@@ -321,126 +328,233 @@ Transport make_transport(const RayTracer& tracer, const ReceiverChart& chart, co
             transport.pixel_info[i] = {transport.pixel_scale[i], camera->object[i]};
         }
     }
-
     return transport;
+}
+
+// Traces indices [from, to) of every replica into `sums` (batches of one replica each, fixed order).
+void trace_photons(const Transport& transport, ReferenceSums& sums, std::uint64_t from, std::uint64_t to,
+                   ProgressBar& progress) {
+    const std::size_t bins = sums.bins, pixels = sums.pixels;
+    const std::uint32_t replicas = sums.replicas;
+    tbb::enumerable_thread_specific<Accumulators> accumulators([&] {
+        Accumulators a;
+        a.bins.assign(bins * replicas, 0);
+        a.pixels.assign(pixels * replicas, 0);
+        return a;
+    });
+    const std::uint64_t per_replica_batches = (to - from + kBatchSize - 1) / kBatchSize;
+    const std::uint64_t batches = per_replica_batches * replicas;
+    std::vector<FluxLedger> batch_ledgers(batches);
+    tbb::parallel_for(tbb::blocked_range<std::uint64_t>(0, batches, 1), [&](const tbb::blocked_range<std::uint64_t>& range) {
+        for (std::uint64_t b = range.begin(); b < range.end(); ++b) {
+            const std::uint32_t replica = static_cast<std::uint32_t>(b / per_replica_batches);
+            const std::uint64_t first = from + (b % per_replica_batches) * kBatchSize;
+            const std::uint64_t last = std::min(to, first + kBatchSize);
+            // Per batch, not per thread: a thread waiting on the chunks below may start another batch.
+            std::vector<std::uint32_t> order, scratch;
+            transport.batch_order(replica, first, last, order, scratch);
+            const std::size_t chunks = (order.size() + kChunkSize - 1) / kChunkSize;
+            std::vector<FluxLedger> chunk_ledgers(chunks);
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, 1), [&](const tbb::blocked_range<std::size_t>& cr) {
+                Accumulators& acc = accumulators.local();
+                acc.bin_offset = replica * bins;
+                acc.pixel_offset = replica * pixels;
+                NoRayLog log;
+                for (std::size_t c = cr.begin(); c < cr.end(); ++c) {
+                    FluxLedger ledger;
+                    const std::size_t end = std::min(order.size(), (c + 1) * kChunkSize);
+                    for (std::size_t j = c * kChunkSize; j < end; ++j)
+                        transport.trace(replica, first + order[j], ledger, acc, log);
+                    chunk_ledgers[c] = ledger;
+                }
+            });
+            FluxLedger ledger;
+            for (const FluxLedger& l : chunk_ledgers) add_ledger(ledger, l);
+            batch_ledgers[b] = ledger;
+            progress.advance(last - first);
+        }
+    });
+    for (const FluxLedger& l : batch_ledgers) add_ledger(sums.ledger_units, l);
+    // Integer sums are exact, so combining the threads' accumulators in any order gives the same bits.
+    for (const Accumulators& a : accumulators) {
+        for (std::size_t i = 0; i < a.bins.size(); ++i) sums.bin_sums[i] += a.bins[i];
+        for (std::size_t i = 0; i < a.pixels.size(); ++i) sums.pixel_sums[i] += a.pixels[i];
+    }
+    sums.per_replica = to;
+}
+
+// Mean, standard error and per-replica images of one view from its replica sums; `area(k)` is the
+// measure that turns a sum into irradiance (0: not measured).
+template <class Area>
+void estimate_view(const std::vector<std::int64_t>& sums, std::size_t count, std::uint32_t replicas, double unit,
+                   int width, int height, Area area, Image& mean, Image& stderr_image, std::vector<Image>& per_replica) {
+    mean = Image(width, height, 1);
+    stderr_image = Image(width, height, 1);
+    per_replica.assign(replicas, Image(width, height, 1));
+    const double r = replicas;
+    for (std::size_t k = 0; k < count; ++k) {
+        const double a = area(k);
+        if (!(a > 0.0)) continue;
+        double sum = 0.0, sq = 0.0;
+        for (std::uint32_t rep = 0; rep < replicas; ++rep) {
+            const double e = static_cast<double>(sums[rep * count + k]) / kFixedScale * unit / a;
+            per_replica[rep].pixels[k] = static_cast<float>(e);
+            sum += e;
+            sq += e * e;
+        }
+        const double m = sum / r;
+        const double var = replicas > 1 ? std::max(0.0, (sq - r * m * m) / (r - 1.0)) / r : 0.0;
+        mean.pixels[k] = static_cast<float>(m);
+        stderr_image.pixels[k] = static_cast<float>(std::sqrt(var));
+    }
+}
+
+ReferenceResult finish_reference(const Transport& transport, const ReceiverChart& chart, const CameraGBuffer* camera,
+                                 const CameraModel* camera_model, std::shared_ptr<const ReferenceSums> sums) {
+    ReferenceResult result;
+    // One replica's photon of light l carries q0 = P_l / scale at n / L photons per light: E = q sum *
+    // scale * L / (n * A).
+    const double unit = transport.scale * static_cast<double>(sums->lights) / static_cast<double>(sums->per_replica);
+    estimate_view(sums->bin_sums, sums->bins, sums->replicas, unit, chart.width(), chart.height(),
+                  [&](std::size_t k) { return chart.bin_area(static_cast<int>(k % chart.width()), static_cast<int>(k / chart.width())); },
+                  result.receiver, result.receiver_stderr, result.receiver_replicas);
+    result.noise_nrmse = nrmse_of(result.receiver, result.receiver_stderr, nullptr);
+    if (camera && sums->pixels > 0) {
+        result.camera_covered = camera->covered;
+        // E_pix = sum w / A_dep = (unit / A_c) sum x with A_c = omega * pixel_scale.
+        estimate_view(sums->pixel_sums, sums->pixels, sums->replicas, unit, camera->width, camera->height,
+                      [&](std::size_t k) {
+                          if (!camera->covered[k]) return 0.0;
+                          const int x = static_cast<int>(k % camera->width), y = static_cast<int>(k / camera->width);
+                          return camera_model->pixel_solid_angle(x, y) * transport.pixel_scale[k];
+                      },
+                      result.camera, result.camera_stderr, result.camera_replicas);
+        result.noise_nrmse_camera = nrmse_of(result.camera, result.camera_stderr, &result.camera_covered);
+    }
+    // The ledger in watts: all replicas together are R n photons, L per light-set.
+    const double watts = transport.scale * sums->lights / (static_cast<double>(sums->per_replica) * sums->replicas);
+    const FluxLedger& u = sums->ledger_units;
+    result.ledger = {u.emitted * watts, u.deposited_receiver * watts, u.deposited_other * watts, u.direct * watts,
+                     u.escaped * watts, u.absorbed * watts, u.truncated * watts};
+    result.photons = sums->per_replica * sums->replicas;
+    result.replicas = static_cast<int>(sums->replicas);
+    result.sums = std::move(sums);
+    return result;
+}
+
+// What the result says about how it was asked for and made.
+void label_result(ReferenceResult& result, const Scene& scene, int frame, const ReferenceSettings& settings,
+                  bool camera_view) {
+    result.noise_target = settings.noise_target;
+    result.noise_target_met = !(settings.noise_target > 0.0) || result.noise_nrmse <= settings.noise_target;
+    result.seed = settings.seed;
+    result.sampler = settings.sampler;
+    ReferenceSettings keyed = settings;
+    keyed.camera_view = camera_view;
+    result.cache_key = reference_cache_key(scene, frame, keyed) + "-" + std::to_string(result.photons);
 }
 
 }  // namespace
 
+std::uint64_t photons_per_replica(std::uint64_t photons, int replicas, std::size_t lights) {
+    const std::uint64_t r = static_cast<std::uint64_t>(std::max(1, replicas));
+    const std::uint64_t l = std::max<std::uint64_t>(1, lights);
+    const std::uint64_t per = (photons + r - 1) / r;
+    return (per + l - 1) / l * l;
+}
+
 ReferenceResult compute_reference(const RayTracer& tracer, const ReceiverChart& chart,
-                                  const CameraGBuffer* camera, const ReferenceSettings& settings) {
-    const auto start = std::chrono::steady_clock::now();
+                                  const CameraGBuffer* camera, const ReferenceSettings& settings,
+                                  const ReferenceSums* start) {
+    const auto clock_start = std::chrono::steady_clock::now();
     const FrameGeometry& frame = tracer.frame();
     const Scene& scene = *frame.scene;
     if (scene.lights.empty()) throw std::runtime_error("reference: the scene has no light");
     if (settings.photons == 0) throw std::runtime_error("reference: photons must be > 0");
+    if (settings.replicas < 2 || settings.replicas > ReferenceSettings::kMaxReplicas)
+        throw std::runtime_error("reference: replicas must be in [2, " + std::to_string(ReferenceSettings::kMaxReplicas) + "]");
     const bool camera_view = camera != nullptr && settings.camera_view;
-    const std::uint64_t photons = settings.photons;
 
     std::unique_ptr<CameraModel> camera_model;
     const Transport transport = make_transport(tracer, chart, camera_view ? camera : nullptr, settings, camera_model);
 
-    const std::size_t bins = static_cast<std::size_t>(chart.width()) * chart.height();
-    const std::size_t pixels = camera_view ? camera->covered.size() : 0;
-    tbb::enumerable_thread_specific<Accumulators> accumulators([&] {
-        Accumulators a;
-        a.bins.assign(bins, FixedPair{0, 0});
-        a.pixels.assign(pixels, FixedPair{0, 0});
-        return a;
-    });
-    const std::uint64_t batches = (photons + kBatchSize - 1) / kBatchSize;
-    std::vector<FluxLedger> batch_ledgers(batches);
-    ProgressBar progress("reference " + scene.name, photons, settings.progress);
-
-    // Each batch is ordered once (batch_order) and then traced in fixed chunks of that order, in parallel
-    // (fine-grained enough to balance two threads on a shared machine); chunk ledgers are summed in chunk
-    // order, so the ledger does not depend on scheduling either.
-    auto run_batches = [&] {
-        tbb::parallel_for(tbb::blocked_range<std::uint64_t>(0, batches, 1), [&](const tbb::blocked_range<std::uint64_t>& range) {
-            for (std::uint64_t b = range.begin(); b < range.end(); ++b) {
-                const std::uint64_t first = b * kBatchSize;
-                const std::uint64_t last = std::min(photons, first + kBatchSize);
-                // Per batch, not per thread: a thread waiting on the chunks below may start another batch.
-                std::vector<std::uint32_t> order, scratch;
-                transport.batch_order(first, last, order, scratch);
-                const std::size_t chunks = (order.size() + kChunkSize - 1) / kChunkSize;
-                std::vector<FluxLedger> chunk_ledgers(chunks);
-                tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, 1), [&](const tbb::blocked_range<std::size_t>& cr) {
-                    Accumulators& acc = accumulators.local();
-                    NoRayLog log;
-                    for (std::size_t c = cr.begin(); c < cr.end(); ++c) {
-                        FluxLedger ledger;
-                        const std::size_t end = std::min(order.size(), (c + 1) * kChunkSize);
-                        for (std::size_t j = c * kChunkSize; j < end; ++j) transport.trace(first + order[j], ledger, acc, log);
-                        chunk_ledgers[c] = ledger;
-                    }
-                });
-                FluxLedger ledger;
-                for (const FluxLedger& l : chunk_ledgers) add_ledger(ledger, l);
-                batch_ledgers[b] = ledger;
-                progress.advance(last - first);
-            }
-        });
-    };
-    if (settings.threads > 0) {
-        tbb::task_arena arena(settings.threads);
-        arena.execute(run_batches);
-    } else {
-        run_batches();
+    auto sums = std::make_shared<ReferenceSums>();
+    sums->replicas = static_cast<std::uint32_t>(settings.replicas);
+    sums->lights = static_cast<std::uint32_t>(scene.lights.size());
+    sums->bins = static_cast<std::size_t>(chart.width()) * chart.height();
+    sums->pixels = camera_view ? camera->covered.size() : 0;
+    sums->bin_sums.assign(sums->bins * sums->replicas, 0);
+    sums->pixel_sums.assign(sums->pixels * sums->replicas, 0);
+    if (start) {
+        if (start->replicas != sums->replicas || start->lights != sums->lights || start->bins != sums->bins ||
+            start->pixels != sums->pixels)
+            throw std::runtime_error("reference: the reference to extend was made with other settings");
+        *sums = *start;
     }
-    progress.finish();
 
+    const std::size_t lights = scene.lights.size();
+    const std::uint64_t cap = photons_per_replica(std::max(settings.photon_cap, settings.photons), settings.replicas, lights);
+    std::uint64_t target = photons_per_replica(settings.photons, settings.replicas, lights);
+    if (settings.noise_target > 0.0) target = std::min(target, cap);
     ReferenceResult result;
-    for (const FluxLedger& l : batch_ledgers) add_ledger(result.ledger, l);
-
-    // Integer sums are exact, so combining the threads' accumulators in any order gives the same bits.
-    std::vector<std::int64_t> bin_sum(bins, 0), bin_sq(bins, 0), pix_sum(pixels, 0), pix_sq(pixels, 0);
-    for (const Accumulators& a : accumulators) {
-        for (std::size_t i = 0; i < bins; ++i) bin_sum[i] += a.bins[i][0], bin_sq[i] += a.bins[i][1];
-        for (std::size_t i = 0; i < pixels; ++i) pix_sum[i] += a.pixels[i][0], pix_sq[i] += a.pixels[i][1];
-    }
-
-    const double n = static_cast<double>(photons);
-    const double wr = transport.weight_ref;
-    // E = (sum w) / A; se^2 = (N sum w^2 / A^2 - E^2) / (N - 1).
-    auto estimate = [&](std::int64_t sum, std::int64_t sq, double area, float& e_out, float& se_out) {
-        const double e = static_cast<double>(sum) / kFixedScale * wr / area;
-        const double m2 = n * (static_cast<double>(sq) / kFixedScale) * wr * wr / (area * area);
-        const double var = photons > 1 ? std::max(0.0, (m2 - e * e) / (n - 1.0)) : 0.0;
-        e_out = static_cast<float>(e);
-        se_out = static_cast<float>(std::sqrt(var));
-    };
-    result.receiver = Image(chart.width(), chart.height(), 1);
-    result.receiver_stderr = Image(chart.width(), chart.height(), 1);
-    for (int j = 0; j < chart.height(); ++j)
-        for (int i = 0; i < chart.width(); ++i) {
-            const std::size_t b = static_cast<std::size_t>(j) * chart.width() + i;
-            const double area = chart.bin_area(i, j);
-            if (area > 0.0) estimate(bin_sum[b], bin_sq[b], area, result.receiver.pixels[b], result.receiver_stderr.pixels[b]);
-        }
-    result.noise_nrmse = nrmse_of(result.receiver, result.receiver_stderr, nullptr);
-
-    if (camera_view) {
-        result.camera = Image(camera->width, camera->height, 1);
-        result.camera_stderr = Image(camera->width, camera->height, 1);
-        result.camera_covered = camera->covered;
-        for (int y = 0; y < camera->height; ++y)
-            for (int x = 0; x < camera->width; ++x) {
-                const std::size_t i = camera->index(x, y);
-                if (!camera->covered[i]) continue;
-                // E_pix = sum w / A_dep = (wr / A_c) sum x with A_c = omega * pixel_scale.
-                const double area = camera_model->pixel_solid_angle(x, y) * transport.pixel_scale[i];
-                estimate(pix_sum[i], pix_sq[i], area, result.camera.pixels[i], result.camera_stderr.pixels[i]);
+    const std::uint64_t photons_before = sums->per_replica * sums->replicas;
+    std::vector<std::uint64_t> round_photons;
+    std::vector<double> round_noise;
+    int rounds = 0;
+    double previous_noise = 0.0;
+    std::uint64_t previous_n = 0;
+    for (;;) {
+        if (target > sums->per_replica) {
+            std::string label = "reference " + scene.name;
+            if (settings.noise_target > 0.0 && rounds > 0) {
+                // The bar's own ETA is the round's; the round is sized to reach the target.
+                char text[160];
+                std::snprintf(text, sizeof text, " round %d: noise %.4g -> target %.4g, %s photons", rounds + 1,
+                              result.noise_nrmse, settings.noise_target,
+                              format_count(static_cast<double>(target * sums->replicas)).c_str());
+                label += text;
             }
-        result.noise_nrmse_camera = nrmse_of(result.camera, result.camera_stderr, &result.camera_covered);
+            ProgressBar progress(label, (target - sums->per_replica) * sums->replicas, settings.progress);
+            trace_photons(transport, *sums, sums->per_replica, target, progress);
+            progress.finish();
+            ++rounds;
+        }
+        result = finish_reference(transport, chart, camera_view ? camera : nullptr, camera_model.get(), sums);
+        round_photons.push_back(result.photons);
+        round_noise.push_back(result.noise_nrmse);
+        if (!(settings.noise_target > 0.0) || !(result.noise_nrmse > settings.noise_target) || sums->per_replica >= cap)
+            break;
+        // The next round: the photons the measured decay predicts (slope from the last two rounds,
+        // 1/2 -- independent sampling's -- until there are two), with 10 % to spare, at least twice
+        // and at most eight times the current count.
+        double slope = 0.5;
+        if (previous_n > 0 && previous_noise > result.noise_nrmse && result.noise_nrmse > 0.0)
+            slope = std::clamp(std::log(previous_noise / result.noise_nrmse) /
+                                   std::log(static_cast<double>(sums->per_replica) / previous_n), 0.5, 1.5);
+        const double n = static_cast<double>(sums->per_replica);
+        const double predicted = result.noise_nrmse > 0.0 ? n * std::pow(result.noise_nrmse / settings.noise_target, 1.0 / slope) * 1.1 : 2.0 * n;
+        previous_n = sums->per_replica;
+        previous_noise = result.noise_nrmse;
+        target = std::min(cap, photons_per_replica(static_cast<std::uint64_t>(std::clamp(predicted, 2.0 * n, 8.0 * n)) * settings.replicas,
+                                                   settings.replicas, lights));
     }
+    result.rounds = rounds;
+    result.round_photons = std::move(round_photons);
+    result.round_noise = std::move(round_noise);
+    result.photons_traced = result.photons - photons_before;
+    label_result(result, scene, frame.frame, settings, camera_view);
+    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - clock_start).count();
+    return result;
+}
 
-    result.photons = photons;
-    result.seed = settings.seed;
-    ReferenceSettings keyed = settings;
-    keyed.camera_view = camera_view;
-    result.cache_key = reference_cache_key(scene, frame.frame, keyed);
-    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+ReferenceResult reference_from_sums(const RayTracer& tracer, const ReceiverChart& chart, const CameraGBuffer* camera,
+                                    const ReferenceSettings& settings, std::shared_ptr<const ReferenceSums> sums) {
+    const bool camera_view = camera != nullptr && settings.camera_view && sums->pixels > 0;
+    std::unique_ptr<CameraModel> camera_model;
+    const Transport transport = make_transport(tracer, chart, camera_view ? camera : nullptr, settings, camera_model);
+    ReferenceResult result = finish_reference(transport, chart, camera_view ? camera : nullptr, camera_model.get(), std::move(sums));
+    result.rounds = 0;
+    label_result(result, *tracer.frame().scene, tracer.frame().frame, settings, camera_view);
     return result;
 }
 
@@ -453,18 +567,24 @@ std::vector<RecordedRay> record_reference_rays(const RayTracer& tracer, const Re
     const bool camera_view = camera != nullptr && settings.camera_view;
     std::unique_ptr<CameraModel> camera_model;
     const Transport transport = make_transport(tracer, chart, camera_view ? camera : nullptr, settings, camera_model);
+    const std::uint32_t replicas = static_cast<std::uint32_t>(std::max(2, settings.replicas));
     Accumulators acc;
-    acc.bins.assign(static_cast<std::size_t>(chart.width()) * chart.height(), FixedPair{0, 0});
-    if (camera_view) acc.pixels.assign(camera->covered.size(), FixedPair{0, 0});
+    acc.bins.assign(static_cast<std::size_t>(chart.width()) * chart.height() * replicas, 0);
+    if (camera_view) acc.pixels.assign(camera->covered.size() * replicas, 0);
     RayRecorder recorder;
     recorder.offset = scene_ray_offset(tracer.frame());
     FluxLedger ledger;
     // The same batches and the same order within each batch as compute_reference.
+    const std::uint64_t per = photons_per_replica(settings.photons, static_cast<int>(replicas), transport.emitters.size());
     std::vector<std::uint32_t> order, scratch;
-    for (std::uint64_t first = 0; first < settings.photons; first += kBatchSize) {
-        const std::uint64_t last = std::min(settings.photons, first + kBatchSize);
-        transport.batch_order(first, last, order, scratch);
-        for (const std::uint32_t i : order) transport.trace(first + i, ledger, acc, recorder);
+    for (std::uint32_t r = 0; r < replicas; ++r) {
+        acc.bin_offset = r * static_cast<std::size_t>(chart.width()) * chart.height();
+        acc.pixel_offset = camera_view ? r * camera->covered.size() : 0;
+        for (std::uint64_t first = 0; first < per; first += kBatchSize) {
+            const std::uint64_t last = std::min(per, first + kBatchSize);
+            transport.batch_order(r, first, last, order, scratch);
+            for (const std::uint32_t i : order) transport.trace(r, first + i, ledger, acc, recorder);
+        }
     }
     return std::move(recorder.rays);
 }

@@ -10,6 +10,9 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <algorithm>
+#include <memory>
+#include <vector>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
@@ -23,8 +26,8 @@ namespace caustics {
 namespace {
 
 // Bump whenever reference.cpp changes what it computes (transport, estimators, sampling).
-constexpr std::uint32_t kReferenceVersion = 2;
-constexpr std::uint32_t kFileFormat = 1;
+constexpr std::uint32_t kReferenceVersion = 3;   // 3: replicas, quasi-Monte Carlo sampler, sums stored
+constexpr std::uint32_t kFileFormat = 2;
 constexpr char kMagic[8] = {'C', 'A', 'U', 'S', 'R', 'E', 'F', '\n'};
 
 class Writer {
@@ -76,6 +79,7 @@ public:
     }
     void raw(void* dst, std::size_t n) {
         if (n > remaining()) throw Corrupt{};
+        if (n == 0) return;   // dst may be null for an empty vector
         std::memcpy(dst, p_, n);
         p_ += n;
     }
@@ -86,46 +90,60 @@ private:
     const char* end_;
 };
 
+// The payload is the integer sums (the images are rebuilt from them with the scene at load time) and
+// the facts that are not in them.
 std::string serialize_payload(const ReferenceResult& r) {
+    const ReferenceSums& sums = *r.sums;
     Writer w;
-    w.image(r.receiver);
-    w.image(r.receiver_stderr);
-    w.image(r.camera);
-    w.image(r.camera_stderr);
-    w.u64(r.camera_covered.size());
-    w.raw(r.camera_covered.data(), r.camera_covered.size());
-    w.f64(r.noise_nrmse);
-    w.f64(r.noise_nrmse_camera);
-    const FluxLedger& l = r.ledger;
+    w.u64(sums.per_replica);
+    w.u32(sums.replicas);
+    w.u32(sums.lights);
+    w.u64(sums.bins);
+    w.u64(sums.pixels);
+    w.raw(sums.bin_sums.data(), sums.bin_sums.size() * sizeof(std::int64_t));
+    w.raw(sums.pixel_sums.data(), sums.pixel_sums.size() * sizeof(std::int64_t));
+    const FluxLedger& l = sums.ledger_units;
     for (double v : {l.emitted, l.deposited_receiver, l.deposited_other, l.direct, l.escaped, l.absorbed, l.truncated})
         w.f64(v);
-    w.u64(r.photons);
+    w.f64(r.noise_nrmse);
     w.u64(r.seed);
     w.f64(r.seconds);   // how long the computation took when it was made (informational)
     return std::move(w.out);
 }
 
-ReferenceResult parse_payload(Reader& in) {
-    ReferenceResult r;
-    r.receiver = in.image();
-    r.receiver_stderr = in.image();
-    r.camera = in.image();
-    r.camera_stderr = in.image();
-    const std::uint64_t covered = in.u64();
-    if (covered > in.remaining()) throw Corrupt{};
-    r.camera_covered.resize(covered);
-    in.raw(r.camera_covered.data(), covered);
-    r.noise_nrmse = in.f64();
-    r.noise_nrmse_camera = in.f64();
-    FluxLedger& l = r.ledger;
+struct CachedEntry {
+    std::shared_ptr<ReferenceSums> sums;
+    double noise_nrmse = 0.0;
+    std::uint64_t seed = 0;
+};
+
+CachedEntry parse_payload(Reader& in) {
+    CachedEntry e;
+    e.sums = std::make_shared<ReferenceSums>();
+    ReferenceSums& s = *e.sums;
+    s.per_replica = in.u64();
+    s.replicas = in.u32();
+    s.lights = in.u32();
+    s.bins = in.u64();
+    s.pixels = in.u64();
+    // Sizes are checked against what is left before anything is allocated.
+    const std::uint64_t words = (static_cast<std::uint64_t>(s.bins) + s.pixels) * s.replicas;
+    if (s.replicas == 0 || s.per_replica == 0 || s.bins > in.remaining() || s.pixels > in.remaining() ||
+        words > in.remaining() / sizeof(std::int64_t))
+        throw Corrupt{};
+    s.bin_sums.resize(s.bins * s.replicas);
+    s.pixel_sums.resize(s.pixels * s.replicas);
+    in.raw(s.bin_sums.data(), s.bin_sums.size() * sizeof(std::int64_t));
+    in.raw(s.pixel_sums.data(), s.pixel_sums.size() * sizeof(std::int64_t));
+    FluxLedger& l = s.ledger_units;
     for (double* v : {&l.emitted, &l.deposited_receiver, &l.deposited_other, &l.direct, &l.escaped, &l.absorbed,
                       &l.truncated})
         *v = in.f64();
-    r.photons = in.u64();
-    r.seed = in.u64();
+    e.noise_nrmse = in.f64();
+    e.seed = in.u64();
     in.f64();   // original compute time
     if (in.remaining() != 0) throw Corrupt{};
-    return r;
+    return e;
 }
 
 std::string encode_file(const ReferenceResult& r, const std::string& key) {
@@ -142,7 +160,7 @@ std::string encode_file(const ReferenceResult& r, const std::string& key) {
 }
 
 // Parses a cache file; false (never a throw) when it is unusable for `key`.
-bool decode_file(const std::string& bytes, const std::string& key, ReferenceResult& out) {
+bool decode_file(const std::string& bytes, const std::string& key, CachedEntry& out) {
     try {
         Reader in(bytes.data(), bytes.size());
         char magic[sizeof kMagic];
@@ -187,8 +205,9 @@ std::string reference_cache_key(const Scene& scene, int frame, const ReferenceSe
         }
     }
     h.u64(static_cast<std::uint64_t>(frame));
-    h.u64(settings.photons);
     h.u64(settings.seed);
+    h.text(sampler_name(settings.sampler));
+    h.u64(static_cast<std::uint64_t>(settings.replicas));
     h.u64(settings.camera_view ? 1 : 0);
     h.u64(static_cast<std::uint64_t>(scene.receiver.width));
     h.u64(static_cast<std::uint64_t>(scene.receiver.height));
@@ -202,44 +221,57 @@ std::string default_cache_dir() {
     return env && *env ? std::string(env) : std::string("results/cache");
 }
 
-ReferenceResult load_or_compute_reference(const FrameGeometry& frame, const RayTracer& tracer,
-                                          const ReceiverChart& chart, const CameraGBuffer* camera,
-                                          const ReferenceSettings& settings, const std::string& cache_dir) {
-    namespace fs = std::filesystem;
-    // The key hashes the scene file's bytes; a scene built in code has none, so two different ones
-    // would share a key. Those are computed every time and never cached.
-    if (frame.scene->source_text.empty()) return compute_reference(tracer, chart, camera, settings);
-    ReferenceSettings keyed = settings;
-    keyed.camera_view = settings.camera_view && camera != nullptr;
-    const std::string key = reference_cache_key(*frame.scene, frame.frame, keyed);
-    const fs::path path = fs::path(cache_dir) / (key + ".ref");
+namespace {
 
-    std::string bytes;
-    if (read_file_bytes(path.string(), bytes)) {
-        ReferenceResult cached;
-        if (decode_file(bytes, key, cached)) {
-            // The receiver and camera sizes are part of the key; a mismatch here means a damaged entry.
-            const bool sizes_ok = cached.receiver.width == chart.width() && cached.receiver.height == chart.height() &&
-                                  (!keyed.camera_view ||
-                                   (cached.camera.width == camera->width && cached.camera.height == camera->height));
-            if (sizes_ok) {
-                cached.cache_key = key;
-                cached.from_cache = true;
-                cached.seconds = 0.0;
-                return cached;
-            }
-        }
-        std::fprintf(stderr, "reference: cache entry %s is damaged or stale; recomputing\n", path.string().c_str());
+namespace fs = std::filesystem;
+
+// Entries of one key: cache_dir/<key>-<photons>.ref.
+struct EntryFile {
+    fs::path path;
+    std::uint64_t photons = 0;
+};
+
+std::vector<EntryFile> entries_of(const std::string& cache_dir, const std::string& key) {
+    std::vector<EntryFile> out;
+    std::error_code ec;
+    const std::string prefix = key + "-";
+    for (fs::directory_iterator it(cache_dir, ec), end; !ec && it != end; it.increment(ec)) {
+        const std::string name = it->path().filename().string();
+        if (name.size() <= prefix.size() + 4 || name.compare(0, prefix.size(), prefix) != 0 ||
+            name.compare(name.size() - 4, 4, ".ref") != 0)
+            continue;
+        const std::string digits = name.substr(prefix.size(), name.size() - prefix.size() - 4);
+        if (digits.empty() || digits.find_first_not_of("0123456789") != std::string::npos || digits.size() > 19) continue;
+        out.push_back({it->path(), std::stoull(digits)});
     }
+    std::sort(out.begin(), out.end(), [](const EntryFile& a, const EntryFile& b) { return a.photons < b.photons; });
+    return out;
+}
 
-    ReferenceResult result = compute_reference(tracer, chart, camera, keyed);
-    result.cache_key = key;
-    result.from_cache = false;
+// Reads an entry; null (and a message) when it is damaged, stale or made for other sizes.
+std::shared_ptr<const ReferenceSums> read_entry(const EntryFile& file, const std::string& key, std::size_t bins,
+                                                std::size_t pixels, const ReferenceSettings& settings,
+                                                std::size_t lights, double& noise) {
+    std::string bytes;
+    CachedEntry entry;
+    if (read_file_bytes(file.path.string(), bytes) && decode_file(bytes, key, entry) && entry.sums->bins == bins &&
+        entry.sums->pixels == pixels && entry.sums->replicas == static_cast<std::uint32_t>(settings.replicas) &&
+        entry.sums->lights == lights && entry.sums->per_replica * entry.sums->replicas == file.photons) {
+        noise = entry.noise_nrmse;
+        return entry.sums;
+    }
+    std::fprintf(stderr, "reference: cache entry %s is damaged or stale; recomputing\n", file.path.string().c_str());
+    std::error_code ec;
+    fs::remove(file.path, ec);
+    return nullptr;
+}
 
+void store_entry(const ReferenceResult& result, const std::string& key, const std::string& cache_dir) {
     // Store atomically. A cache that cannot be written costs time later, not correctness now.
     std::error_code ec;
     fs::create_directories(cache_dir, ec);
-    const fs::path tmp = fs::path(cache_dir) / (key + ".ref.tmp." + std::to_string(::getpid()));
+    const fs::path path = fs::path(cache_dir) / (key + "-" + std::to_string(result.photons) + ".ref");
+    const fs::path tmp = fs::path(path.string() + ".tmp." + std::to_string(::getpid()));
     {
         std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
         const std::string encoded = encode_file(result, key);
@@ -248,7 +280,7 @@ ReferenceResult load_or_compute_reference(const FrameGeometry& frame, const RayT
         if (!out) {
             std::fprintf(stderr, "reference: warning: cannot write cache file %s\n", tmp.string().c_str());
             fs::remove(tmp, ec);
-            return result;
+            return;
         }
     }
     fs::rename(tmp, path, ec);
@@ -256,6 +288,53 @@ ReferenceResult load_or_compute_reference(const FrameGeometry& frame, const RayT
         std::fprintf(stderr, "reference: warning: cannot store cache file %s: %s\n", path.string().c_str(),
                      ec.message().c_str());
         fs::remove(tmp, ec);
+    }
+}
+
+}  // namespace
+
+ReferenceResult load_or_compute_reference(const FrameGeometry& frame, const RayTracer& tracer,
+                                          const ReceiverChart& chart, const CameraGBuffer* camera,
+                                          const ReferenceSettings& settings, const std::string& cache_dir) {
+    // The key hashes the scene file's bytes; a scene built in code has none, so two different ones
+    // would share a key. Those are computed every time and never cached.
+    if (frame.scene->source_text.empty()) return compute_reference(tracer, chart, camera, settings);
+    ReferenceSettings keyed = settings;
+    keyed.camera_view = settings.camera_view && camera != nullptr;
+    const std::string key = reference_cache_key(*frame.scene, frame.frame, keyed);
+    const std::size_t lights = frame.scene->lights.size();
+    const std::size_t bins = static_cast<std::size_t>(chart.width()) * chart.height();
+    const std::size_t pixels = keyed.camera_view ? camera->covered.size() : 0;
+    const std::uint64_t wanted = photons_per_replica(settings.photons, settings.replicas, lights) *
+                                 static_cast<std::uint64_t>(std::max(1, settings.replicas));
+    const bool target = settings.noise_target > 0.0;
+
+    // Serve an entry that answers the request; else extend the largest smaller one.
+    std::shared_ptr<const ReferenceSums> start;
+    for (const EntryFile& file : entries_of(cache_dir, key)) {
+        if (!target && file.photons > wanted) break;
+        double noise = 0.0;
+        std::shared_ptr<const ReferenceSums> sums = read_entry(file, key, bins, pixels, keyed, lights, noise);
+        if (!sums) continue;
+        const bool answers = target ? (noise <= settings.noise_target || file.photons >= settings.photon_cap)
+                                    : file.photons == wanted;
+        if (answers) {
+            ReferenceResult cached = reference_from_sums(tracer, chart, camera, keyed, sums);
+            cached.from_cache = true;
+            cached.seconds = 0.0;
+            return cached;
+        }
+        start = std::move(sums);
+    }
+
+    ReferenceSettings run = keyed;
+    if (target && start) run.photons = std::max(run.photons, start->per_replica * start->replicas);
+    ReferenceResult result = compute_reference(tracer, chart, camera, run, start.get());
+    result.from_cache = false;
+    store_entry(result, key, cache_dir);
+    if (start) {   // the extended entry holds every photon of the smaller one: it is no longer needed
+        std::error_code ec;
+        fs::remove(fs::path(cache_dir) / (key + "-" + std::to_string(start->per_replica * start->replicas) + ".ref"), ec);
     }
     return result;
 }

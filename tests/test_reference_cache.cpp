@@ -1,5 +1,5 @@
 // Reference cache tests: the key changes with every input, damaged entries are rebuilt, and a scene
-// built in code (no file bytes to key on) is never cached.
+// built in code (no file bytes to key on) is never cached. Noise targets and extension: test_reference_rqmc.cpp.
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -35,9 +35,17 @@ TEST(ReferenceCache, KeyChangesWithEveryInput) {
     text.source_text[text.source_text.size() / 2] ^= 1;
     EXPECT_NE(base, reference_cache_key(text, 0, settings));
     EXPECT_NE(base, reference_cache_key(s, 1, settings));
+    // Photons are not in the key: entries of one key differ in photons (file name), and a larger
+    // one extends a smaller one.
     ReferenceSettings more = settings;
     more.photons += 1;
-    EXPECT_NE(base, reference_cache_key(s, 0, more));
+    EXPECT_EQ(base, reference_cache_key(s, 0, more));
+    ReferenceSettings sampler = settings;
+    sampler.sampler = SamplerKind::Independent;
+    EXPECT_NE(base, reference_cache_key(s, 0, sampler));
+    ReferenceSettings replicas = settings;
+    replicas.replicas += 1;
+    EXPECT_NE(base, reference_cache_key(s, 0, replicas));
     ReferenceSettings seed = settings;
     seed.seed += 1;
     EXPECT_NE(base, reference_cache_key(s, 0, seed));
