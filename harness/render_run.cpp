@@ -10,11 +10,14 @@
 
 #include <tbb/global_control.h>
 
+#include "analytic_truth.hpp"
+#include "baseline.hpp"
 #include "beauty.hpp"
 #include "errors.hpp"
 #include "image_io.hpp"
 #include "metrics.hpp"
 #include "registry.hpp"
+#include "run_errors.hpp"
 #include "timing.hpp"
 
 #ifndef CAUSTICS_BUILD_TYPE
@@ -29,19 +32,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
-
-json error_json(const ErrorMetrics* e, bool radiometric) {
-    json out;
-    out["nrmse"] = e ? json_number(e->nrmse) : json(nullptr);
-    out["relmse"] = e ? json_number(e->relmse) : json(nullptr);
-    out["psnr"] = e ? json_number(e->psnr) : json(nullptr);
-    out["ssim"] = e ? json_number(e->ssim) : json(nullptr);
-    // A radiometric method is never fitted (DESIGN.md section 3).
-    const bool fitted = e && !radiometric && e->fitted;
-    out["nrmse_fit"] = fitted ? json_number(e->nrmse_fit) : json(nullptr);
-    out["fit_scale"] = fitted ? json_number(e->fit_scale) : json(nullptr);
-    return out;
-}
 
 std::int64_t count_nonfinite(const Image& image, const std::vector<std::uint8_t>* mask) {
     std::int64_t n = 0;
@@ -63,6 +53,14 @@ void check_size(const Image& image, int w, int h, const std::string& method, con
                                  std::to_string(h) + "x1");
 }
 
+json timing_json(const TimingSummary* t) {
+    if (!t || t->samples == 0)
+        return {{"median", nullptr}, {"min", nullptr}, {"p90", nullptr}, {"stdev", nullptr}, {"iqr", nullptr}, {"ci_rel", nullptr}};
+    return {{"median", json_number(t->median)}, {"min", json_number(t->min)}, {"p90", json_number(t->p90)},
+            {"stdev", json_number(t->stdev)}, {"iqr", json_number(t->iqr)},
+            {"ci_rel", t->has_interval ? json_number(t->ci_rel) : json(nullptr)}};
+}
+
 // The metrics.json skeleton: every key of DESIGN.md section 7, values null until measured.
 json metrics_skeleton(const SceneFrame& sf, const ResolvedMethod& m, const RenderOptions& options) {
     json j;
@@ -71,21 +69,27 @@ json metrics_skeleton(const SceneFrame& sf, const ResolvedMethod& m, const Rende
     j["frame"] = sf.geometry().frame;
     j["params"] = params_json(*m.info, m.params);
     j["radiometric"] = m.info->radiometric;
-    j["time_ms"] = {{"median", nullptr}, {"min", nullptr}, {"p90", nullptr}};
+    j["time_ms"] = timing_json(nullptr);
+    j["frame_ms"] = timing_json(nullptr);
+    j["frame_time"] = nullptr;
     j["fps"] = nullptr;
+    j["render_fps"] = nullptr;
+    j["noisy_timing"] = nullptr;
     j["prepare_ms"] = nullptr;
     j["update_ms"] = nullptr;
     j["stages_ms"] = json::object();
     j["threads"] = ThreadLimit::effective();
-    j["error"] = {{"receiver", error_json(nullptr, m.info->radiometric)},
-                  {"camera", error_json(nullptr, m.info->radiometric)}};
+    j["error"] = {{"receiver", null_view_errors()}, {"camera", null_view_errors()}};
     j["reference"] = {{"photons", nullptr}, {"noise_nrmse", nullptr}, {"cache_key", nullptr}};
+    j["truth"] = {{"kind", nullptr}, {"noise_nrmse", nullptr}};
+    j["baseline"] = {{"kind", nullptr}, {"error", nullptr}};
     j["health"] = json::object();
     j["status"] = nullptr;
     j["build_type"] = CAUSTICS_BUILD_TYPE;
     j["warmup"] = options.warmup;
     j["repeats"] = options.repeats;
     j["below_reference_noise"] = nullptr;
+    j["no_better_than_flat"] = nullptr;
     j["message"] = "";
     return j;
 }
@@ -148,13 +152,22 @@ ResolvedMethod resolve_method(const std::string& name, const std::map<std::strin
     return r;
 }
 
-ReferenceResult reference_for(const SceneFrame& sf, const RenderOptions& options) {
+ReferenceSettings reference_settings(const RenderOptions& options) {
     ReferenceSettings settings;
     settings.photons = options.photons;
     settings.seed = options.seed;
+    settings.sampler = options.sampler;
+    settings.replicas = options.replicas;
+    settings.noise_target = options.noise_target;
+    settings.photon_cap = options.photon_cap;
     settings.threads = options.threads;
     settings.camera_view = true;
     settings.progress = options.progress;
+    return settings;
+}
+
+ReferenceResult reference_for(const SceneFrame& sf, const RenderOptions& options) {
+    const ReferenceSettings settings = reference_settings(options);
     const std::string cache = options.cache_dir.empty() ? default_cache_dir() : options.cache_dir;
     return load_or_compute_reference(sf.geometry(), sf.tracer(), sf.chart(), &sf.gbuffer(), settings, cache);
 }
@@ -176,39 +189,70 @@ RenderRun run_method(const SceneFrame& sf, const ResolvedMethod& m, const Render
         return run;
     }
 
-    // Timed regions: prepare, update, each repeat of render. Nothing else (DESIGN.md section 6).
+    // Timed regions: prepare, update, each repeat of render (and of update where the scene is animated).
+    // Nothing else (DESIGN.md section 6).
     Stopwatch clock;
     method->prepare(sf.scene());
     const double prepare_ms = clock.ms();
     clock.reset();
     method->update(sf.geometry());
-    const double update_ms = clock.ms();
+    const double first_update_ms = clock.ms();
 
     RenderRequest request;
     request.receiver = &sf.chart();
     request.camera = &sf.gbuffer();
-    for (int i = 0; i < options.warmup; ++i) (void)method->render(sf.geometry(), request);
-    std::vector<double> times;
+    // In an animated scene the geometry changes every frame, so a frame costs update + render; in a
+    // static one update runs once and a frame is the render alone.
+    const bool animated = sf.scene().animation.frames > 1;
+    for (int i = 0; i < options.warmup; ++i) {
+        if (animated) method->update(sf.geometry());
+        (void)method->render(sf.geometry(), request);
+    }
+    std::vector<double> render_times, update_times, frame_times;
     std::map<std::string, std::vector<double>> stage_times;
-    const int repeats = std::max(1, options.repeats);
-    for (int i = 0; i < repeats; ++i) {
+    TimingPolicy policy;
+    policy.min_repeats = std::max(1, options.repeats);
+    policy.precision = options.timing_precision;
+    policy.max_seconds = options.timing_max_s;
+    double timed_seconds = 0.0;
+    TimingStop stop = TimingStop::Continue;
+    while (stop == TimingStop::Continue) {
+        double update_ms = 0.0;
+        if (animated) {
+            clock.reset();
+            method->update(sf.geometry());
+            update_ms = clock.ms();
+            update_times.push_back(update_ms);
+        }
         clock.reset();
         CausticOutput out = method->render(sf.geometry(), request);
         const double ms = clock.ms();
-        times.push_back(ms);
+        render_times.push_back(ms);
+        frame_times.push_back(update_ms + ms);
+        timed_seconds += (update_ms + ms) / 1000.0;
         for (const auto& [stage, stage_ms] : out.stages_ms) stage_times[stage].push_back(stage_ms);
         run.output = std::move(out);   // the previous output is freed outside the timed region
+        stop = timing_stop(frame_times, timed_seconds, policy);
     }
-    const TimingSummary t = summarize_ms(times);
+    const TimingSummary t = summarize_ms(render_times);
+    const TimingSummary f = summarize_ms(frame_times);
     json& j = run.metrics;
-    j["time_ms"] = {{"median", json_number(t.median)}, {"min", json_number(t.min)}, {"p90", json_number(t.p90)}};
-    j["fps"] = t.median > 0.0 ? json_number(1000.0 / t.median) : json(nullptr);
+    j["time_ms"] = timing_json(&t);
+    j["frame_ms"] = timing_json(&f);
+    j["frame_time"] = animated ? "update+render" : "render";
+    j["fps"] = f.median > 0.0 ? json_number(1000.0 / f.median) : json(nullptr);
+    j["render_fps"] = t.median > 0.0 ? json_number(1000.0 / t.median) : json(nullptr);
+    j["noisy_timing"] = stop == TimingStop::Capped;
+    if (stop == TimingStop::Capped)
+        messages.push_back("noisy timing: the median's 95 % interval is +-" + std::to_string(100.0 * f.ci_rel).substr(0, 5) +
+                           " % after " + std::to_string(f.samples) + " frames (target " +
+                           std::to_string(100.0 * options.timing_precision).substr(0, 4) + " %)");
     j["prepare_ms"] = json_number(prepare_ms);
-    j["update_ms"] = json_number(update_ms);
+    j["update_ms"] = json_number(animated ? summarize_ms(update_times).median : first_update_ms);
     json stages = json::object();
     for (auto& [stage, samples] : stage_times) stages[stage] = json_number(summarize_ms(samples).median);
     j["stages_ms"] = stages;
-    j["repeats"] = repeats;
+    j["repeats"] = static_cast<int>(render_times.size());
 
     // Output shape and health: non-finite values are counted by the harness too and never averaged in.
     const CausticOutput& out = run.output;
@@ -228,31 +272,45 @@ RenderRun run_method(const SceneFrame& sf, const ResolvedMethod& m, const Render
     if (out.receiver.empty()) messages.push_back("method produced no receiver map");
     if (out.camera.empty()) messages.push_back("method produced no camera view");
 
-    // The reference is asked for only now, after the timed region and only for supported runs.
+    // The truth and the reference are asked for only now, after the timed region and only for supported
+    // runs. The receiver's truth is the analytic closed form where the scene has one (truth auto or
+    // analytic), else the Monte Carlo reference; the camera view is always measured against the reference.
     const ReferenceResult* reference = reference_provider ? reference_provider() : nullptr;
     if (reference) {
         run.have_reference = true;
-        j["reference"] = {{"photons", reference->photons},
-                          {"noise_nrmse", json_number(reference->noise_nrmse)},
-                          {"cache_key", reference->cache_key}};
+        j["reference"] = reference_summary_json(*reference);
+        AnalyticTruth analytic;
+        if (options.truth != "reference") analytic = analytic_truth(sf.geometry(), sf.chart());
+        if (options.truth == "analytic" && !analytic.available)
+            messages.push_back("no analytic truth (" + analytic.reason + "): measured against the reference");
+        const TruthMaps truth = analytic.available
+                                    ? TruthMaps{&analytic.receiver, nullptr, nullptr}
+                                    : TruthMaps{&reference->receiver, &reference->receiver_replicas, &reference->receiver_stderr};
+        j["truth"] = {{"kind", analytic.available ? analytic.kind : std::string("reference")},
+                      {"noise_nrmse", analytic.available ? json(0.0) : json_number(reference->noise_nrmse)}};
         if (!unstable) {
-            const bool fit = !info.radiometric;
             if (!out.receiver.empty()) {
-                const ErrorMetrics e = compare_images(out.receiver, reference->receiver, fit);
-                j["error"]["receiver"] = error_json(&e, info.radiometric);
-                const double err = fit ? e.nrmse_fit : e.nrmse;
-                if (std::isfinite(err) && std::isfinite(reference->noise_nrmse))
-                    j["below_reference_noise"] = err < 3.0 * reference->noise_nrmse;
+                const Baseline baseline = make_baseline(flat_interface_baseline(sf.geometry(), sf.chart()), *truth.mean);
+                const ViewErrors e = measure_view(out.receiver, truth, nullptr, info.radiometric, &baseline.map);
+                j["error"]["receiver"] = e.json;
+                if (e.net.valid) j["below_reference_noise"] = e.net.includes_zero;
+                j["baseline"] = {{"kind", baseline.kind}, {"error", e.have_baseline ? json_number(e.baseline_error) : json(nullptr)}};
+                if (e.net.valid && e.have_baseline) {
+                    j["no_better_than_flat"] = e.no_better_than_flat;
+                    if (e.no_better_than_flat) messages.push_back("no better than the no-caustic baseline (" + baseline.kind + ")");
+                }
             }
             if (!out.camera.empty() && !reference->camera.empty()) {
                 std::vector<std::uint8_t> mask = g.covered;
                 if (reference->camera_covered.size() == mask.size())
                     for (std::size_t p = 0; p < mask.size(); ++p) mask[p] &= reference->camera_covered[p];
-                const ErrorMetrics e = compare_images(out.camera, reference->camera, fit, &mask);
-                j["error"]["camera"] = error_json(&e, info.radiometric);
+                const TruthMaps camera_truth{&reference->camera, &reference->camera_replicas, &reference->camera_stderr};
+                const ViewErrors e = measure_view(out.camera, camera_truth, &mask, info.radiometric, nullptr);
+                j["error"]["camera"] = e.json;
                 if (e.samples == 0) messages.push_back("camera view: no pixel's primary hit is a diffuse receiver");
             }
-            if (fit) messages.push_back("not radiometric: nrmse_fit/fit_scale are after a least-squares scale fit");
+            if (!info.radiometric)
+                messages.push_back("not radiometric: nrmse_fit/fit_scale are after a least-squares scale fit");
         }
     } else {
         messages.push_back("no reference: error values are null");
@@ -316,17 +374,30 @@ RenderRun run_render(const RenderOptions& options) {
 
 // ---------------------------------------------------------------------------------------------------
 
+nlohmann::json reference_summary_json(const ReferenceResult& ref) {
+    return {{"photons", ref.photons},
+            {"noise_nrmse", json_number(ref.noise_nrmse)},
+            {"noise_nrmse_camera", json_number(ref.noise_nrmse_camera)},
+            {"cache_key", ref.cache_key},
+            {"sampler", sampler_name(ref.sampler)},
+            {"replicas", ref.replicas},
+            {"noise_target", ref.noise_target > 0.0 ? json_number(ref.noise_target) : json(nullptr)},
+            {"noise_target_met", ref.noise_target > 0.0 ? json(ref.noise_target_met) : json(nullptr)}};
+}
+
 nlohmann::json reference_json(const Scene& scene, int frame, const ReferenceResult& ref) {
     const FluxLedger& l = ref.ledger;
-    json j;
+    json j = reference_summary_json(ref);
     j["scene"] = scene.name;
     j["scene_path"] = scene.path;
     j["frame"] = frame;
-    j["photons"] = ref.photons;
     j["seed"] = ref.seed;
-    j["cache_key"] = ref.cache_key;
-    j["noise_nrmse"] = json_number(ref.noise_nrmse);
-    j["noise_nrmse_camera"] = json_number(ref.noise_nrmse_camera);
+    j["rounds"] = ref.rounds;
+    j["round_photons"] = ref.round_photons;
+    json noise = json::array();
+    for (double v : ref.round_noise) noise.push_back(json_number(v));
+    j["round_noise"] = noise;
+    j["photons_traced"] = ref.photons_traced;
     j["seconds"] = json_number(ref.seconds);
     j["from_cache"] = ref.from_cache;
     j["photons_per_second"] = ref.seconds > 0.0 ? json_number(static_cast<double>(ref.photons) / ref.seconds)

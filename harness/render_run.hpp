@@ -30,9 +30,16 @@ struct RenderOptions {
     int frame = 0;
     std::string out_dir;                            // empty: write no files
     int warmup = 3;
-    int repeats = 10;
-    std::uint64_t photons = 4'000'000;              // reference photons
+    int repeats = 10;                               // timed frames at least (then until precise or capped)
+    double timing_precision = 0.05;                 // relative half-width of the median's 95 % interval
+    double timing_max_s = 3.0;                      // time cap of the timed frames [s]
+    std::uint64_t photons = 4'000'000;              // reference photons (the first round with a noise target)
     std::uint64_t seed = 1;                         // reference seed
+    SamplerKind sampler = SamplerKind::Sobol;       // reference sampler
+    int replicas = ReferenceSettings::kDefaultReplicas;
+    double noise_target = 0.0;                      // > 0: reference photons until noise_nrmse <= target
+    std::uint64_t photon_cap = ReferenceSettings::kDefaultPhotonCap;
+    std::string truth = "auto";                     // receiver truth: auto | analytic | reference
     bool no_reference = false;                      // skip the reference: error values are null
     std::string cache_dir;                          // reference cache; empty: default_cache_dir()
     int threads = 0;                                // 0: every core
@@ -92,7 +99,9 @@ using ReferenceProvider = std::function<const ReferenceResult*()>;
 RenderRun run_method(const SceneFrame& sf, const ResolvedMethod& method, const RenderOptions& options,
                      const ReferenceProvider& reference);
 
-// The reference for a scene frame with the options' photons, seed, threads and cache folder.
+// The reference settings the options ask for (photons, seed, sampler, replicas, noise target, threads).
+ReferenceSettings reference_settings(const RenderOptions& options);
+// The reference for a scene frame with the options' settings and cache folder.
 ReferenceResult reference_for(const SceneFrame& sf, const RenderOptions& options);
 
 // Writes DIR/receiver.exr, DIR/camera.exr, DIR/beauty.png (when options.beauty), DIR/metrics.json and
@@ -106,6 +115,8 @@ RenderRun run_render(const RenderOptions& options);
 // reference_receiver.exr, reference_camera.exr, reference_stderr.exr (receiver standard error) and
 // reference.json (photons, seed, noise, cache key, flux ledger, timing).
 nlohmann::json reference_json(const Scene& scene, int frame, const ReferenceResult& ref);
+// metrics.json's `reference` block: photons, noise, cache key, sampler, replicas, noise target and whether met.
+nlohmann::json reference_summary_json(const ReferenceResult& ref);
 void write_reference_outputs(const std::string& dir, const Scene& scene, int frame, const ReferenceResult& ref);
 
 // Limits TBB to `threads` workers for its lifetime (0: no limit) and reports the effective count.

@@ -16,6 +16,7 @@
 #include <sstream>
 #include <thread>
 
+#include "analytic_truth.hpp"
 #include "errors.hpp"
 #include "image_io.hpp"
 #include "registry.hpp"
@@ -150,6 +151,23 @@ json bare_row(const PlannedRun& run, const std::string& status, const std::strin
             {"status", status}, {"message", message}};
 }
 
+// Shortest text that reads back as the same double (children parse it).
+std::string number_text(double v) {
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%.17g", v);
+    return buf;
+}
+
+// The reference the run's children will ask for, so the parent's computation fills their cache entry.
+void apply_reference_options(const SweepSpec& spec, const PlannedRun& run, RenderOptions& ro) {
+    ro.photons = spec.photons;
+    ro.seed = spec.seed;
+    ro.noise_target = run.noise_target;
+    ro.photon_cap = spec.photon_cap;
+    parse_sampler(spec.sampler, ro.sampler);
+    ro.replicas = spec.replicas;
+}
+
 }  // namespace
 
 std::string results_csv(const SweepSpec& spec, const std::vector<json>& rows) {
@@ -184,14 +202,50 @@ std::string results_csv(const SweepSpec& spec, const std::vector<json>& rows) {
     add("time_ms_median", {"time_ms", "median"});
     add("time_ms_min", {"time_ms", "min"});
     add("time_ms_p90", {"time_ms", "p90"});
+    add("time_ms_stdev", {"time_ms", "stdev"});
+    add("time_ms_iqr", {"time_ms", "iqr"});
+    add("time_ms_ci_rel", {"time_ms", "ci_rel"});
+    add("frame_time", {"frame_time"});
+    add("frame_ms_median", {"frame_ms", "median"});
+    add("frame_ms_ci_rel", {"frame_ms", "ci_rel"});
     add("fps", {"fps"});
+    add("render_fps", {"render_fps"});
+    add("noisy_timing", {"noisy_timing"});
     add("prepare_ms", {"prepare_ms"});
     add("update_ms", {"update_ms"});
-    for (const char* metric : {"nrmse", "relmse", "psnr", "ssim", "nrmse_fit", "fit_scale"}) {
+    for (const char* metric : {"nrmse", "relmse", "psnr", "ssim", "nrmse_fit", "fit_scale", "nrmse_net", "nrmse_net_lo",
+                               "nrmse_net_hi", "relmse_net", "nrmse_fit_net", "nrmse_fit_net_lo", "nrmse_fit_net_hi",
+                               "consistent_with_reference"}) {
         add(metric, {"error", "receiver", metric});
         add(std::string("camera_") + metric, {"error", "camera", metric});
     }
-    add("noise_nrmse", {"reference", "noise_nrmse"});
+    // The error the report ranks, of the kind the method is judged by (fitted when not radiometric).
+    columns.push_back({"error_kind", [](const json& r) {
+                           if (!r.contains("radiometric") || !r["radiometric"].is_boolean()) return json();
+                           return json(r["radiometric"].get<bool>() ? "nrmse" : "nrmse_fit");
+                       }});
+    for (const char* suffix : {"", "_lo", "_hi"}) {
+        const std::string s = suffix;
+        columns.push_back({"error_net" + s, [s](const json& r) {
+                               const json& radiometric = at_path(r, {"radiometric"});
+                               if (!radiometric.is_boolean()) return json();
+                               const std::string key = (radiometric.get<bool>() ? "nrmse_net" : "nrmse_fit_net") + s;
+                               return at_path(r, {"error", "receiver", key.c_str()});
+                           }});
+    }
+    add("baseline_error", {"baseline", "error"});
+    add("baseline_kind", {"baseline", "kind"});
+    add("error_vs_baseline", {"error", "receiver", "error_vs_baseline"});
+    add("no_better_than_flat", {"no_better_than_flat"});
+    add("truth", {"truth", "kind"});
+    columns.push_back({"noise_nrmse", [](const json& r) {
+                           // The noise of the truth the errors are measured against (0 for a closed form).
+                           const json& t = at_path(r, {"truth", "noise_nrmse"});
+                           return t.is_null() ? at_path(r, {"reference", "noise_nrmse"}) : t;
+                       }});
+    add("reference_noise_nrmse", {"reference", "noise_nrmse"});
+    add("noise_target", {"reference", "noise_target"});
+    add("noise_target_met", {"reference", "noise_target_met"});
     add("below_reference_noise", {"below_reference_noise"});
     add("reference_photons", {"reference", "photons"});
     add("threads", {"threads"});
@@ -276,14 +330,19 @@ SweepSummary run_sweep(const SweepOptions& options) {
             references_done.insert(ref_key);
             try {
                 RenderOptions ro;
-                ro.photons = spec.photons;
-                ro.seed = spec.seed;
+                apply_reference_options(spec, run, ro);
                 ro.threads = options.threads;
                 ro.cache_dir = cache;
                 ro.progress = options.progress;
                 SceneFrame sf(load_scene(run.scene_path), run.frame);
                 const ReferenceResult ref = reference_for(sf, ro);
-                write_reference_outputs((dir / "references" / ref_key).string(), sf.scene(), run.frame, ref);
+                const fs::path ref_dir = dir / "references" / ref_key;
+                write_reference_outputs(ref_dir.string(), sf.scene(), run.frame, ref);
+                // The closed form the runs' receiver errors are measured against, for the report's images.
+                if (run.truth != "reference") {
+                    const AnalyticTruth truth = analytic_truth(sf.geometry(), sf.chart());
+                    if (truth.available) write_exr(truth.receiver, (ref_dir / "truth_receiver.exr").string());
+                }
             } catch (const InputError&) {
                 // Recorded per run below, from the child's message.
             }
@@ -293,6 +352,11 @@ SweepSummary run_sweep(const SweepOptions& options) {
                                          "--frame", std::to_string(run.frame), "--out", run_dir.string(),
                                          "--photons", std::to_string(spec.photons), "--seed", std::to_string(spec.seed),
                                          "--warmup", std::to_string(spec.warmup), "--repeats", std::to_string(spec.repeats),
+                                         "--timing-precision", number_text(spec.timing_precision),
+                                         "--max-time", number_text(spec.timing_max_s), "--truth", run.truth,
+                                         "--sampler", spec.sampler, "--replicas", std::to_string(spec.replicas),
+                                         "--noise-target", number_text(run.noise_target),
+                                         "--photon-cap", std::to_string(spec.photon_cap),
                                          "--threads", std::to_string(options.threads), "--cache", cache};
         for (const auto& [k, v] : run.params) {
             argv.push_back("--set");

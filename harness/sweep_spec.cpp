@@ -161,7 +161,17 @@ SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string
     buffer << in.rdbuf();
     json root = parse_rejecting_duplicates(buffer.str(), path);
     if (!root.is_object()) throw InputError(path, "", "a sweep spec is a JSON object");
-    check_keys(root, {"description", "scenes", "frames", "reference", "timing", "methods", "report"}, path, "");
+    check_keys(root, {"description", "scenes", "frames", "reference", "truth", "timing", "methods", "report"}, path, "");
+    const auto require_number = [&](const json& v, const std::string& key, double lo, double hi) {
+        if (!v.is_number() || !(v.get<double>() >= lo && v.get<double>() <= hi))
+            throw InputError(path, key, "must be a number in [" + json(lo).dump() + ", " + json(hi).dump() + "]");
+        return v.get<double>();
+    };
+    const auto require_truth = [&](const json& v, const std::string& key) {
+        if (!v.is_string() || (v != "auto" && v != "analytic" && v != "reference"))
+            throw InputError(path, key, "must be \"auto\", \"analytic\" or \"reference\"");
+        return v.get<std::string>();
+    };
 
     // Command-line axes replace or add axes before validation, so they are checked like the file.
     for (const auto& text : axis_overrides) {
@@ -188,6 +198,7 @@ SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string
         if (!root["description"].is_string()) throw InputError(path, "description", "must be a string");
         spec.description = root["description"].get<std::string>();
     }
+    if (root.contains("truth")) spec.truth = require_truth(root["truth"], "truth");
     std::vector<int> default_frames{0};
     if (root.contains("frames")) default_frames = parse_frames(root["frames"], path, "frames");
     if (!root.contains("scenes") || !root["scenes"].is_array() || root["scenes"].empty())
@@ -200,9 +211,12 @@ SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string
             scene.path = resolve_scene(entry.get<std::string>(), path, key);
             scene.frames = default_frames;
         } else if (entry.is_object() && entry.contains("scene") && entry["scene"].is_string()) {
-            check_keys(entry, {"scene", "frames"}, path, key);
+            check_keys(entry, {"scene", "frames", "noise_target", "truth"}, path, key);
             scene.path = resolve_scene(entry["scene"].get<std::string>(), path, key + ".scene");
             scene.frames = entry.contains("frames") ? parse_frames(entry["frames"], path, key + ".frames") : default_frames;
+            if (entry.contains("noise_target"))
+                scene.noise_target = require_number(entry["noise_target"], key + ".noise_target", 0.0, 10.0);
+            if (entry.contains("truth")) scene.truth = require_truth(entry["truth"], key + ".truth");
         } else {
             throw InputError(path, key, "must be a scene name or path, or {\"scene\": NAME, \"frames\": [...]}");
         }
@@ -211,14 +225,25 @@ SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string
     if (root.contains("reference")) {
         const json& r = root["reference"];
         if (!r.is_object()) throw InputError(path, "reference", "must be an object {\"photons\": N, \"seed\": S}");
-        check_keys(r, {"photons", "seed"}, path, "reference");
+        check_keys(r, {"photons", "seed", "noise_target", "photon_cap", "sampler", "replicas"}, path, "reference");
+        if (r.contains("noise_target")) spec.noise_target = require_number(r["noise_target"], "reference.noise_target", 0.0, 10.0);
+        if (r.contains("photon_cap"))
+            spec.photon_cap = static_cast<std::uint64_t>(require_integer(r["photon_cap"], path, "reference.photon_cap", 1000, 100'000'000'000LL));
+        if (r.contains("replicas")) spec.replicas = static_cast<int>(require_integer(r["replicas"], path, "reference.replicas", 2, 256));
+        if (r.contains("sampler")) {
+            if (!r["sampler"].is_string() || (r["sampler"] != "sobol" && r["sampler"] != "independent"))
+                throw InputError(path, "reference.sampler", "must be \"sobol\" or \"independent\"");
+            spec.sampler = r["sampler"].get<std::string>();
+        }
         if (r.contains("photons")) spec.photons = static_cast<std::uint64_t>(require_integer(r["photons"], path, "reference.photons", 1000, 100'000'000'000LL));
         if (r.contains("seed")) spec.seed = static_cast<std::uint64_t>(require_integer(r["seed"], path, "reference.seed", 0, 1LL << 62));
     }
     if (root.contains("timing")) {
         const json& t = root["timing"];
         if (!t.is_object()) throw InputError(path, "timing", "must be an object {\"warmup\": W, \"repeats\": R}");
-        check_keys(t, {"warmup", "repeats", "timeout_s"}, path, "timing");
+        check_keys(t, {"warmup", "repeats", "timeout_s", "precision", "max_time_s"}, path, "timing");
+        if (t.contains("precision")) spec.timing_precision = require_number(t["precision"], "timing.precision", 0.001, 1.0);
+        if (t.contains("max_time_s")) spec.timing_max_s = require_number(t["max_time_s"], "timing.max_time_s", 0.0, 3600.0);
         if (t.contains("warmup")) spec.warmup = static_cast<int>(require_integer(t["warmup"], path, "timing.warmup", 0, 10000));
         if (t.contains("repeats")) spec.repeats = static_cast<int>(require_integer(t["repeats"], path, "timing.repeats", 1, 100000));
         if (t.contains("timeout_s")) {
@@ -269,6 +294,8 @@ std::vector<PlannedRun> plan_runs(const SweepSpec& spec) {
                     run.scene_path = scene_path;
                     run.scene_name = scene_name;
                     run.frame = frame;
+                    run.noise_target = scene.noise_target >= 0.0 ? scene.noise_target : spec.noise_target;
+                    run.truth = scene.truth.empty() ? spec.truth : scene.truth;
                     run.method = m.method;
                     run.id = safe_token(scene_name) + "-f" + std::to_string(frame) + "-" + safe_token(m.method);
                     for (std::size_t a = 0; a < m.axes.size(); ++a) {

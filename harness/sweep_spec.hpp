@@ -5,10 +5,15 @@
 // {
 //   "description": "free text",
 //   "scenes": ["sine", {"scene": "pool", "frames": [30, 60]}],   // a name in scenes/ or a path,
-//                                                 // optionally with its own frames
+//                                                 // optionally with its own frames, "noise_target"
+//                                                 // and "truth"
 //   "frames": [0, 10] | {"range": [0, 30, 10]},  // frames of scenes that name none (default [0])
-//   "reference": {"photons": 2000000, "seed": 1},
-//   "timing": {"warmup": 2, "repeats": 5, "timeout_s": 600},
+//   "reference": {"photons": 2000000, "seed": 1,       // photons: fixed count, or the first round
+//                 "noise_target": 0.02,               // add photons until noise_nrmse <= target
+//                 "photon_cap": 2000000000, "sampler": "sobol", "replicas": 8},
+//   "truth": "auto",                             // receiver truth: auto | analytic | reference
+//   "timing": {"warmup": 2, "repeats": 5, "timeout_s": 600,
+//              "precision": 0.05, "max_time_s": 3},  // repeat until the median is known to 5 % or 3 s
 //   "report": {...},                             // settings for `caustics report` (scripts/report)
 //   "methods": {
 //     "caustic_triangles": {"grid": {"pow2": [32, 256]}},
@@ -43,6 +48,8 @@ struct SweepMethod {
 struct SweepScene {
     std::string path;                  // resolved scene file path
     std::vector<int> frames;
+    double noise_target = -1.0;        // < 0: the spec's reference.noise_target
+    std::string truth;                 // empty: the spec's truth
 };
 
 struct SweepSpec {
@@ -51,8 +58,15 @@ struct SweepSpec {
     std::vector<SweepScene> scenes;
     std::uint64_t photons = 2'000'000;
     std::uint64_t seed = 1;
+    double noise_target = 0.0;         // 0: a fixed photon count
+    std::uint64_t photon_cap = 2'000'000'000;
+    std::string sampler = "sobol";
+    int replicas = 8;
+    std::string truth = "auto";
     int warmup = 2;
     int repeats = 5;
+    double timing_precision = 0.05;
+    double timing_max_s = 3.0;
     double timeout_s = 0.0;            // per-run limit (0: none); a run past it is recorded as failed
     std::vector<SweepMethod> methods;
     nlohmann::json as_run;             // the spec after command-line overrides (the manifest records it)
@@ -64,6 +78,8 @@ struct PlannedRun {
     std::string scene_path;
     std::string scene_name;
     int frame = 0;
+    double noise_target = 0.0;         // the scene's reference noise target (0: fixed photons)
+    std::string truth = "auto";
     std::string method;
     std::map<std::string, std::string> params;   // the axis values of this run
 };

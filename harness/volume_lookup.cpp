@@ -7,34 +7,24 @@
 
 #include <tbb/parallel_for.h>
 
+#include "baseline.hpp"
 #include "receiver_chart.hpp"
 #include "timing.hpp"
 
 namespace caustics {
 
+// The flat-interface optics are shared with the no-caustic baseline (baseline.cpp).
 glm::dvec3 mean_refracted_direction(const Scene& scene, double ior) {
-    glm::dvec3 d = scene.lights.empty() ? glm::dvec3(0, 0, -1) : glm::normalize(scene.lights.front().direction);
-    const double eta = 1.0 / ior, cos_i = std::fabs(d.z);
-    const double k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
-    return glm::normalize(eta * d + (eta * cos_i - std::sqrt(std::max(k, 0.0))) * glm::dvec3(0, 0, 1));
+    return flat_interface_transmission(scene.lights.empty() ? Light{} : scene.lights.front(), 1.0, ior, false).direction;
 }
 
 double flat_transmitted_irradiance(const Scene& scene, double ior, const glm::dvec3& receiver_normal) {
     if (scene.lights.empty()) return 0.0;
-    const Light& light = scene.lights.front();
-    const glm::dvec3 d = glm::normalize(light.direction);
-    const double cos_i = std::fabs(d.z);
-    const glm::dvec3 t = mean_refracted_direction(scene, ior);
-    double transmittance = 1.0;
-    if (scene.fresnel) {
-        const double cos_t = std::fabs(t.z);
-        const double rs = (cos_i - ior * cos_t) / (cos_i + ior * cos_t);
-        const double rp = (ior * cos_i - cos_t) / (ior * cos_i + cos_t);
-        transmittance = 1.0 - 0.5 * (rs * rs + rp * rp);
-    }
+    const FlatTransmission beam = flat_interface_transmission(scene.lights.front(), 1.0, ior, scene.fresnel);
+    const glm::dvec3& t = beam.direction;
     // Flux per horizontal area E0 cos_i T, carried along t onto the receiver.
     const double on_receiver = std::max(0.0, -glm::dot(t, glm::normalize(receiver_normal)));
-    return light.irradiance * cos_i * transmittance * on_receiver / std::max(std::fabs(t.z), 1e-9);
+    return beam.horizontal_irradiance * on_receiver / std::max(std::fabs(t.z), 1e-9);
 }
 
 // ---- Receiver lookups ----
@@ -49,15 +39,14 @@ struct LookupContext {
 
 // Length of the mean refracted ray from the mean water surface down to p.
 double path_below_surface(const LookupContext& ctx, const glm::dvec3& p) {
-    return (ctx.lookup->surface_z - p.z) / std::max(-ctx.refracted.z, 1e-6);
+    return refracted_path_length(p, ctx.refracted, ctx.lookup->surface_z);
 }
 
 // Whether light reaches p through the water's rectangle along the mean refracted direction.
 bool lit(const LookupContext& ctx, const glm::dvec3& p) {
     const VolumeLookup& l = *ctx.lookup;
     if (!(l.water_hi.x > l.water_lo.x && l.water_hi.y > l.water_lo.y)) return true;
-    const glm::dvec2 entry = glm::dvec2(p) - path_below_surface(ctx, p) * glm::dvec2(ctx.refracted);
-    return entry.x >= l.water_lo.x && entry.x <= l.water_hi.x && entry.y >= l.water_lo.y && entry.y <= l.water_hi.y;
+    return enters_through_rectangle(p, ctx.refracted, l.surface_z, l.water_lo, l.water_hi);
 }
 
 constexpr double kFaceTolerance = 1e-2;

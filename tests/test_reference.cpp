@@ -25,6 +25,7 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include "analytic_truth.hpp"
 #include "ball_lens.hpp"
 #include "reference_support.hpp"
 #include "camera.hpp"
@@ -34,6 +35,7 @@
 #include "receiver_chart.hpp"
 #include "reference.hpp"
 #include "scene.hpp"
+#include "statistics.hpp"
 
 namespace fs = std::filesystem;
 using namespace caustics;
@@ -54,53 +56,6 @@ double sidak_z(int tests) {
         (std::erfc(mid / std::sqrt(2.0)) > alpha ? lo : hi) = mid;
     }
     return 0.5 * (lo + hi);
-}
-
-// Exact refraction of the downward ray at x0 through z = A sin(k x0) (no small-slope approximation),
-// continued to the floor z = floor_z. Returns the landing x.
-double sine_landing_x(double x0, double amplitude, double k, double ior, double floor_z) {
-    const double z0 = amplitude * std::sin(k * x0);
-    const double slope = amplitude * k * std::cos(k * x0);
-    const glm::dvec3 n = glm::normalize(glm::dvec3(-slope, 0.0, 1.0));   // upward surface normal
-    const glm::dvec3 d(0.0, 0.0, -1.0);
-    const double eta = 1.0 / ior;
-    const double cos_i = -glm::dot(d, n);
-    const double cos_t = std::sqrt(1.0 - eta * eta * (1.0 - cos_i * cos_i));
-    const glm::dvec3 t = eta * d + (eta * cos_i - cos_t) * n;
-    return x0 + t.x * (floor_z - z0) / t.z;
-}
-
-// Mean of E over each of `bins` equal intervals of [lo, hi], for a 1-D mapping x0 -> X(x0) of a
-// uniform source of density `e0` per unit x0 over [src_lo, src_hi]. The flux of each source segment is
-// spread over its image segment (X linear within the segment), so the bin average is
-// (1 / dX_bin) * integral of E0 / |dX/dx0| over the preimages: exactly the closed form
-// E(X) = E0 sum_preimages 1 / |dX/dx0|, averaged over the bin.
-template <class Map, class Weight>
-std::vector<double> bin_average_1d(Map map, Weight weight, double src_lo, double src_hi, std::size_t segments,
-                                   double lo, double hi, int bins) {
-    std::vector<double> flux(static_cast<std::size_t>(bins), 0.0);
-    const double bin_w = (hi - lo) / bins;
-    double x_prev = src_lo, X_prev = map(src_lo);
-    for (std::size_t s = 1; s <= segments; ++s) {
-        const double x = src_lo + (src_hi - src_lo) * static_cast<double>(s) / segments;
-        const double X = map(x);
-        const double w = weight(0.5 * (x + x_prev)) * (x - x_prev);
-        double a = std::min(X, X_prev), b = std::max(X, X_prev);
-        if (b - a < 1e-15) {
-            const int i = static_cast<int>(std::floor((a - lo) / bin_w));
-            if (i >= 0 && i < bins) flux[static_cast<std::size_t>(i)] += w;
-        } else {
-            const int i0 = std::max(0, static_cast<int>(std::floor((a - lo) / bin_w)));
-            const int i1 = std::min(bins - 1, static_cast<int>(std::floor((b - lo) / bin_w)));
-            for (int i = i0; i <= i1; ++i) {
-                const double overlap = std::min(b, lo + (i + 1) * bin_w) - std::max(a, lo + i * bin_w);
-                if (overlap > 0.0) flux[static_cast<std::size_t>(i)] += w * overlap / (b - a);
-            }
-        }
-        x_prev = x;
-        X_prev = X;
-    }
-    return flux;   // flux per bin; the caller divides by the bin's measure
 }
 
 // A closed triangle mesh of the unit sphere: an icosahedron subdivided `levels` times, CCW outside.
@@ -141,32 +96,32 @@ TriangleMesh icosphere(int levels, double radius) {
 // ---------------------------------------------------------------- closed forms
 
 // Sine surface, normal incidence, floor above the first focus: each receiver column (averaged over y)
-// against the exact 1-D Snell mapping.
+// against the exact Snell mapping (harness/analytic_truth; its own tests: test_analytic_truth.cpp).
 TEST(ReferenceClosedForm, SineSurfaceMatchesExactSnellMapping) {
     constexpr int kBinsX = 128, kBinsY = 8;
     TracedScene setup(sine_test_scene(kBinsX, kBinsY));
     const Object& water = setup.scene.objects.at(static_cast<std::size_t>(find_object(setup.scene, "water")));
-    const Object& floor = setup.scene.objects.at(static_cast<std::size_t>(find_object(setup.scene, "floor")));
-    const double amplitude = water.heightfield.amplitude;
-    const double k = 2.0 * std::numbers::pi / water.heightfield.wavelength;
-    const double ior = water.material.ior;
-    const double floor_z = floor.center.z;
-    const double x_lo = floor.center.x - 0.5 * floor.u.x, x_hi = floor.center.x + 0.5 * floor.u.x;
     ASSERT_EQ(water.heightfield.direction, glm::dvec2(1.0, 0.0));
-    ASSERT_EQ(water.heightfield.phase, 0.0);
 
-    const ReferenceResult ref = setup.run(3'000'000);
-
-    auto map = [&](double x0) { return sine_landing_x(x0, amplitude, k, ior, floor_z); };
     // Above the first focus the mapping must be monotonic (no folds): check it, so the scene stays a
     // fold-free validation case.
-    for (double x0 = -0.6; x0 < 0.6; x0 += 1e-4) ASSERT_GT(map(x0 + 1e-4), map(x0));
-    const double e0 = setup.scene.lights[0].irradiance;
-    std::vector<double> closed = bin_average_1d(map, [&](double) { return e0; }, -0.6, 0.6, 2'000'000, x_lo, x_hi, kBinsX);
-    const double bin_w = (x_hi - x_lo) / kBinsX;
-    for (double& c : closed) c /= bin_w;
+    SinePlane plane;
+    plane.amplitude = water.heightfield.amplitude;
+    plane.k = 2.0 * std::numbers::pi / water.heightfield.wavelength;
+    plane.offset = water.heightfield.phase;
+    plane.ior = water.material.ior;
+    plane.floor_z = setup.scene.objects.at(static_cast<std::size_t>(find_object(setup.scene, "floor"))).center.z;
+    for (double x0 = -0.6; x0 < 0.6; x0 += 1e-4) ASSERT_GT(plane.trace(x0 + 1e-4).landing, plane.trace(x0).landing);
 
-    const double z = sidak_z(kBinsX);
+    const AnalyticTruth truth = analytic_truth(*setup.frame, *setup.chart);
+    ASSERT_TRUE(truth.available) << truth.reason;
+    const ReferenceResult ref = setup.run(3'000'000);
+    std::vector<double> closed(kBinsX, 0.0);
+    for (int j = 0; j < kBinsY; ++j)
+        for (int i = 0; i < kBinsX; ++i) closed[static_cast<std::size_t>(i)] += truth.receiver.at(i, j) / kBinsY;
+
+    // Standard errors from the reference's replicas: Student t with replicas - 1 degrees of freedom.
+    const double z = student_t_critical(sidak_level(kFamilyAlpha, kBinsX), ref.replicas > 1 ? ref.replicas - 1.0 : 1e9);
     int worst = -1;
     double worst_z = 0.0;
     for (int i = 0; i < kBinsX; ++i) {

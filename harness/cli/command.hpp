@@ -9,6 +9,9 @@
 
 #include <CLI/CLI.hpp>
 
+#include "photon_sampler.hpp"
+#include "reference.hpp"
+
 namespace caustics::cli {
 
 // A subcommand: `setup` declares its options on its CLI11 sub-app and returns the action to run once
@@ -26,6 +29,11 @@ std::vector<Command> registered_commands();
 struct CommandRegistrar {
     explicit CommandRegistrar(Command (*make)());
 };
+
+// The reference's sampling options shared by `reference` and `render`: --sampler, --replicas,
+// --noise-target, --photon-cap. Values are checked by CLI11 (exit 2 with the valid range).
+void add_reference_sampling_options(CLI::App& app, SamplerKind& sampler, int& replicas, double& noise_target,
+                                    std::uint64_t& photon_cap);
 
 // --set KEY=VALUE assignments; throws InputError for one without '='. A repeated key keeps the last value.
 std::map<std::string, std::string> parse_assignments(const std::vector<std::string>& sets, const std::string& option);

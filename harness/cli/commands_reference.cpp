@@ -1,4 +1,5 @@
 // caustics reference SCENE [--photons N] [--frame F] [--out DIR] [--threads T] [--seed S] [--cache DIR]
+//                          [--sampler S] [--replicas R] [--noise-target X] [--photon-cap N]
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -20,6 +21,10 @@ struct ReferenceArgs {
     int threads = 0;
     std::uint64_t seed = 1;
     std::string cache;
+    SamplerKind sampler = SamplerKind::Sobol;
+    int replicas = ReferenceSettings::kDefaultReplicas;
+    double noise_target = 0.0;
+    std::uint64_t photon_cap = ReferenceSettings::kDefaultPhotonCap;
 };
 
 int run_reference(const ReferenceArgs& a) {
@@ -32,6 +37,10 @@ int run_reference(const ReferenceArgs& a) {
     options.seed = a.seed;
     options.threads = a.threads;
     options.cache_dir = a.cache;
+    options.sampler = a.sampler;
+    options.replicas = a.replicas;
+    options.noise_target = a.noise_target;
+    options.photon_cap = a.photon_cap;
     const ReferenceResult ref = reference_for(sf, options);
     const std::string out = a.out.empty() ? (fs::path("results") / "reference" / sf.scene().name /
                                              ("frame" + std::to_string(a.frame))).string()
@@ -40,7 +49,11 @@ int run_reference(const ReferenceArgs& a) {
     std::cout << "reference " << sf.scene().name << " frame " << a.frame << ": " << ref.photons << " photons, "
               << (ref.from_cache ? "from cache" : std::to_string(ref.seconds) + " s") << ", noise_nrmse "
               << ref.noise_nrmse << ", flux emitted " << ref.ledger.emitted << " W, on receiver "
-              << ref.ledger.deposited_receiver << " W\nwrote " << out << "/reference.json\n";
+              << ref.ledger.deposited_receiver << " W\n";
+    if (ref.noise_target > 0.0)
+        std::cout << "noise target " << ref.noise_target << (ref.noise_target_met ? " met" : " NOT met (photon cap reached)")
+                  << " after " << ref.rounds << " round(s)\n";
+    std::cout << "wrote " << out << "/reference.json\n";
     return 0;
 }
 
@@ -58,6 +71,7 @@ Command make_reference_command() {
         app.add_option("--threads", a->threads, "Worker threads (0: all cores)")->check(CLI::NonNegativeNumber);
         app.add_option("--seed", a->seed, "Photon RNG seed")->capture_default_str();
         app.add_option("--cache", a->cache, "Reference cache folder (default $CAUSTICS_CACHE_DIR or results/cache)");
+        add_reference_sampling_options(app, a->sampler, a->replicas, a->noise_target, a->photon_cap);
         return [a]() { return run_reference(*a); };
     };
     return c;

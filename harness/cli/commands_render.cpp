@@ -1,5 +1,7 @@
 // caustics render SCENE --method NAME [--set KEY=VALUE]... [--frame F] [--out DIR] [--no-reference]
 //                [--photons N] [--warmup W] [--repeats R] [--threads T] [--seed S] [--cache DIR]
+//                [--sampler S] [--replicas R] [--noise-target X] [--photon-cap N] [--truth T]
+//                [--timing-precision P] [--max-time S]
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -35,13 +37,16 @@ int run_render_command(RenderArgs a) {
     std::cout << m["method"].get<std::string>() << " on " << m["scene"].get<std::string>() << " frame "
               << m["frame"].get<int>() << ": " << run.status;
     if (run.status != "skipped") {
-        std::cout << ", median " << value_text(m["time_ms"]["median"]) << " ms (" << value_text(m["fps"])
-                  << " fps, " << m["threads"].get<int>() << " threads)";
+        std::cout << ", frame " << value_text(m["frame_ms"]["median"]) << " ms (" << m["frame_time"].get<std::string>()
+                  << ", " << value_text(m["fps"]) << " fps, " << m["threads"].get<int>() << " threads)";
         if (run.have_reference) {
             const bool fit = !m["radiometric"].get<bool>();
             const auto& e = m["error"]["receiver"];
-            std::cout << ", receiver " << (fit ? "nrmse_fit " : "nrmse ") << value_text(fit ? e["nrmse_fit"] : e["nrmse"])
-                      << " (reference noise " << value_text(m["reference"]["noise_nrmse"]) << ")";
+            const std::string key = fit ? "nrmse_fit_net" : "nrmse_net";
+            std::cout << ", receiver " << key << " " << value_text(e[key]) << " [" << value_text(e[key + "_lo"]) << ", "
+                      << value_text(e[key + "_hi"]) << "] against " << m["truth"]["kind"].get<std::string>()
+                      << " (noise " << value_text(m["truth"]["noise_nrmse"]) << "), baseline "
+                      << value_text(m["baseline"]["error"]);
         }
     }
     std::cout << "\n";
@@ -72,6 +77,19 @@ Command make_render_command() {
         app.add_option("--threads", o.threads, "Worker threads (0: all cores)")->check(CLI::NonNegativeNumber);
         app.add_option("--seed", o.seed, "Reference photon RNG seed")->capture_default_str();
         app.add_option("--cache", o.cache_dir, "Reference cache folder (default $CAUSTICS_CACHE_DIR or results/cache)");
+        add_reference_sampling_options(app, o.sampler, o.replicas, o.noise_target, o.photon_cap);
+        app.add_option("--truth", o.truth,
+                       "Receiver ground truth: auto (the analytic closed form where the scene has one, else the "
+                       "reference), analytic (say so where there is none) or reference")
+            ->check(CLI::IsMember({"auto", "analytic", "reference"}))
+            ->capture_default_str();
+        app.add_option("--timing-precision", o.timing_precision,
+                       "Time frames until the median's 95 % interval is within this relative half-width")
+            ->check(CLI::Range(0.001, 1.0))
+            ->capture_default_str();
+        app.add_option("--max-time", o.timing_max_s, "Time cap of the timed frames in seconds (then flagged noisy_timing)")
+            ->check(CLI::Range(0.0, 3600.0))
+            ->capture_default_str();
         return [a]() { return run_render_command(*a); };
     };
     return c;

@@ -6,9 +6,12 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+from matplotlib.container import ErrorbarContainer  # noqa: E402
 from matplotlib.colors import LogNorm, Normalize  # noqa: E402
+from matplotlib.ticker import LogFormatter  # noqa: E402
 
-from load import ok_runs, read_image  # noqa: E402
+from load import ok_runs, read_image, scene_baseline  # noqa: E402
 from pareto import pareto_front  # noqa: E402
 
 MARKERS = "osD^v<>ph*"
@@ -38,6 +41,14 @@ def irradiance_norm(reference):
     return Normalize(vmin=0.0, vmax=scale or 1.0, clip=True), "E_c [W/m^2]"
 
 
+class PlainLogFormatter(LogFormatter):
+    """Log-axis labels as plain numbers ("2", "0.5"): a sweep spanning less than a decade otherwise gets
+    "2 x 10^0" or, narrower still, repeated rounded labels ("9e-01, 9e-01")."""
+
+    def _num_to_string(self, x, vmin, vmax):
+        return f"{x:.3g}"
+
+
 def _save(fig, directory, name):
     paths = []
     for ext in ("png", "pdf"):
@@ -55,32 +66,122 @@ def _style(method_labels):
     return {label: (cmap(i % 10), MARKERS[i % len(MARKERS)]) for i, label in enumerate(sorted(method_labels))}
 
 
-def time_vs_error(frame, scene, directory):
-    """Every run as a point, each method's Pareto front, log axes, the reference noise floor as a band."""
+# Caption phrases the report and the figures share, so the two never describe the axes differently.
+NET_ERROR = "net error (reference noise removed), 95 % interval"
+FRAME_TIME = "frame time = update + render for animated scenes"
+BASELINE_LABEL = "no-caustic baseline (flat interface)"
+
+
+def log_floor(values):
+    """Where a log axis draws a net error of 0: half the smallest positive value. Such a run cannot be told
+    from the truth at this reference noise; dropping it (what a log axis does to 0) would hide the best runs."""
+    values = np.asarray(values, dtype=float)
+    values = values[np.isfinite(values) & (values > 0)]
+    return 0.5 * float(values.min()) if values.size else 1e-6
+
+
+def has_frame_time(frame):
+    return "frame_ms_median" in frame and pd.to_numeric(frame["frame_ms_median"], errors="coerce").notna().any()
+
+
+def draw_time_vs_error(ax, frame, scene):
+    """Every run as a point with its net error's 95 % interval as a vertical bar, each method's Pareto front,
+    the no-caustic baseline as a horizontal line and the reference noise as a band, on log axes.
+
+    Returns what a caption needs (floor, number of runs drawn at it, baseline, ...) or None without runs."""
     runs = ok_runs(frame[frame["scene"] == scene])
     if runs.empty:
         return None
-    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    baseline = scene_baseline(frame, scene)
+    floor = log_floor(np.concatenate([runs[c].to_numpy(float) for c in ("error", "error_lo", "error_hi")]
+                                     + [[baseline if baseline is not None else np.nan]]))
     style = _style(runs["label"].unique())
+    clipped_total = bars_clipped = 0
     for label, group in runs.groupby("label"):
         color, marker = style[label]
-        points = list(zip(group["time_ms_median"], group["error"]))
-        ax.scatter(group["time_ms_median"], group["error"], color=color, marker=marker, alpha=0.45, s=22)
-        front = [points[i] for i in pareto_front(points)]
-        ax.step([p[0] for p in front], [p[1] for p in front], where="post", color=color, marker=marker,
-                label=label, linewidth=1.6)
-    noise = runs["noise_nrmse"].dropna() if "noise_nrmse" in runs else []
+        x = group["frame_ms"].to_numpy(float)
+        error = group["error"].to_numpy(float)
+        y = np.maximum(error, floor)
+        lo = np.maximum(np.where(np.isfinite(group["error_lo"]), group["error_lo"], y), floor)
+        hi = np.maximum(np.where(np.isfinite(group["error_hi"]), group["error_hi"], y), floor)
+        ax.errorbar(x, y, yerr=[np.maximum(y - lo, 0.0), np.maximum(hi - y, 0.0)], fmt="none", ecolor=color,
+                    alpha=0.5, elinewidth=0.9, capsize=2)
+        ax.scatter(x, y, color=color, marker=marker, alpha=0.45, s=22)
+        clipped = error <= 0.0
+        bars_clipped += int((np.nan_to_num(group["error_lo"].to_numpy(float), nan=1.0) <= 0.0).sum())
+        if clipped.any():
+            ax.scatter(x[clipped], y[clipped], facecolors="none", edgecolors="k", marker="o", s=90,
+                       linewidths=1.0, label=None if clipped_total else f"net error 0, drawn at {floor:.2g}")
+            clipped_total += int(clipped.sum())
+        # The front ranks the true values (0 beats any positive error); only the drawing is clipped.
+        front = pareto_front(list(zip(x, error)))
+        ax.step(x[front], y[front], where="post", color=color, marker=marker, label=label, linewidth=1.6)
+    if baseline is not None:
+        ax.axhline(max(baseline, floor), color="k", linestyle="--", linewidth=1.2, label=BASELINE_LABEL)
+    noise = runs["noise_nrmse"].dropna()
+    noise = noise[noise > 0]
     if len(noise):
-        lo, hi = float(np.min(noise)), float(np.max(noise))
-        ax.axhspan(lo, 3.0 * hi, color="0.6", alpha=0.25, label="reference noise (1x-3x)")
+        ax.axhspan(float(noise.min()), 3.0 * float(noise.max()), color="0.6", alpha=0.25,
+                   label="reference noise (1x-3x)")
+    has_net = bool(runs["error_is_net"].any())
+    has_frame = has_frame_time(runs)
     ax.set_xscale("log")
     ax.set_yscale("log")
-    ax.set_xlabel("frame time, median [ms]  (log)")
-    ax.set_ylabel("receiver-map nrmse vs reference  (log)")
-    ax.set_title(f"{scene}: time vs error (lines: Pareto fronts)")
+    ax.set_xlabel(f"{FRAME_TIME}\n(median ms, log)" if has_frame else "render time, median [ms]  (log)")
+    ax.xaxis.set_major_formatter(PlainLogFormatter())
+    ax.xaxis.set_minor_formatter(PlainLogFormatter(minor_thresholds=(2, 0.5)))
+    ax.set_ylabel(f"{NET_ERROR}\n(receiver map, log)" if has_net else "receiver-map nrmse vs reference  (log)")
+    ax.set_title(f"{scene}: frame time vs {'net ' if has_net else ''}error (lines: Pareto fronts)")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    return _save(fig, directory, f"time_vs_error_{scene}")
+    ax.legend(fontsize=7)
+    return {"floor": floor, "clipped": clipped_total, "bars_clipped": bars_clipped, "baseline": baseline,
+            "has_net": has_net, "has_frame_time": has_frame, "raw_only": int((~runs["error_is_net"]).sum()),
+            "noise": float(noise.max()) if len(noise) else 0.0}
+
+
+def error_bar_extents(ax):
+    """(x, lower end, upper end) of every vertical error bar drawn on ax: what tests inspect."""
+    extents = []
+    for container in ax.containers:
+        if isinstance(container, ErrorbarContainer) and container.has_yerr:
+            for collection in container.lines[2]:
+                for segment in collection.get_segments():
+                    if len(segment) == 0:  # a run without a bar (NaN) leaves an empty segment
+                        continue
+                    extents.append((float(segment[0][0]), float(min(segment[:, 1])), float(max(segment[:, 1]))))
+    return extents
+
+
+def time_vs_error_caption(scene, info):
+    """The report.md caption of draw_time_vs_error's figure."""
+    if info["has_net"]:
+        text = (f"Figure: {scene}, each point one run. Error axis: {NET_ERROR} drawn as vertical bars. ")
+    else:
+        text = f"Figure: {scene}, each point one run. Error axis: raw nrmse (this sweep has no net error). "
+    if info["raw_only"] and info["has_net"]:
+        text += f"{info['raw_only']} run(s) without a net error show their raw error, without bars. "
+    text += (f"Time axis: {FRAME_TIME}, median ms. " if info["has_frame_time"]
+             else "Time axis: render time, median ms (this sweep records no per-frame cost). ")
+    text += "Lines: Pareto fronts; methods marked (fit) are measured after a least-squares scale fit. "
+    if info["baseline"] is not None:
+        text += f"Dashed line: {BASELINE_LABEL}, net error {info['baseline']:.3g}. "
+    if info["noise"] > 0:
+        text += "Grey band: 1x-3x the reference noise. "
+    if info["clipped"] or info["bars_clipped"]:
+        text += (f"A log axis has no 0: {info['clipped']} run(s) with net error 0 (circled) and "
+                 f"{info['bars_clipped']} interval(s) reaching 0 are drawn down to {info['floor']:.2g}, half the "
+                 f"smallest positive value. ")
+    return text.strip()
+
+
+def time_vs_error(frame, scene, directory):
+    """The time-vs-error figure written to disk: (paths, report.md caption), or None without runs."""
+    fig, ax = plt.subplots(figsize=(7.2, 5.0))
+    info = draw_time_vs_error(ax, frame, scene)
+    if info is None:
+        plt.close(fig)
+        return None
+    return _save(fig, directory, f"time_vs_error_{scene}"), time_vs_error_caption(scene, info)
 
 
 def error_vs_iterations(frame, scene, directory):
@@ -96,29 +197,34 @@ def error_vs_iterations(frame, scene, directory):
     style = _style(runs["label"].unique())
     grids = sorted({grid for (_, grid), _ in lines})
     dashes = ["-", "--", ":", "-."]
+    floor = log_floor(runs["error"])
     for (label, grid), group in lines:
         g = group.groupby("iterations")["error"].median().sort_index()
         color, marker = style[label]
-        ax.plot(g.index, g.values, color=color, marker=marker, label=f"{label}, grid {int(grid)}",
-                linestyle=dashes[grids.index(grid) % len(dashes)])
+        ax.plot(g.index, np.maximum(g.values, floor), color=color, marker=marker,
+                label=f"{label}, grid {int(grid)}", linestyle=dashes[grids.index(grid) % len(dashes)])
     ax.set_yscale("log")
     ax.set_xlabel("iterations")
-    ax.set_ylabel("receiver-map nrmse vs reference  (log)")
-    ax.set_title(f"{scene}: error vs iterations")
+    net = bool(runs["error_is_net"].any())
+    ax.set_ylabel("net error (reference noise removed), median  (log)" if net
+                  else "receiver-map nrmse vs reference  (log)")
+    zero = " (0 drawn at %.2g)" % floor if (runs["error"] <= 0).any() else ""
+    ax.set_title(f"{scene}: error vs iterations{zero}")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7)
     return _save(fig, directory, f"error_vs_iterations_{scene}")
 
 
 def fps_vs_grid(frame, scene, directory):
-    """fps against grid on log-log axes; the legend gives the fitted slope d log fps / d log grid."""
+    """fps (1000 / frame time, render only in older sweeps) against grid on log-log axes; the legend gives the
+    fitted slope d log fps / d log grid."""
     runs = ok_runs(frame[frame["scene"] == scene])
     if runs.empty or runs["grid"].nunique() < 2:
         return None
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
     style = _style(runs["method"].unique())   # speed is not fitted: plain method names
     for label, group in runs.groupby("method"):
-        g = group.groupby("grid")["fps"].median().sort_index()
+        g = group.groupby("grid")["frame_fps"].median().sort_index()
         if len(g) < 2:
             continue
         slope = np.polyfit(np.log(g.index.values.astype(float)), np.log(g.values), 1)[0]
@@ -127,7 +233,8 @@ def fps_vs_grid(frame, scene, directory):
     ax.set_xscale("log", base=2)
     ax.set_yscale("log")
     ax.set_xlabel("grid resolution  (log2)")
-    ax.set_ylabel("frames per second of render()  (log)")
+    ax.set_ylabel("fps = 1000 / frame time  (log)" if has_frame_time(runs)
+                  else "frames per second of render()  (log)")
     ax.set_title(f"{scene}: fps vs grid (fitted log-log slope)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
@@ -155,7 +262,14 @@ def image_grid(frame, scene, directory, sweep_dir, chosen):
         return None
     picks = _chosen_runs(runs, chosen)
     frame_no = int(picks[0]["frame"])
-    reference = read_image(os.path.join(sweep_dir, "references", f"{scene}-f{frame_no}", "reference_receiver.exr"))
+    ref_dir = os.path.join(sweep_dir, "references", f"{scene}-f{frame_no}")
+    # The receiver truth the errors were measured against: the analytic closed form where the sweep wrote
+    # one (zero noise), else the Monte Carlo reference.
+    reference = read_image(os.path.join(ref_dir, "truth_receiver.exr"))
+    truth_title = "analytic truth"
+    if reference is None:
+        reference = read_image(os.path.join(ref_dir, "reference_receiver.exr"))
+        truth_title = "reference"
     if reference is None:
         return None
     maps = [(p, read_image(os.path.join(sweep_dir, "runs", p["run_id"], "receiver.exr"))) for p in picks]
@@ -173,20 +287,20 @@ def image_grid(frame, scene, directory, sweep_dir, chosen):
     rows = 3 if any(os.path.exists(b) for b in beauty) else 2
     fig, axes = plt.subplots(rows, n + 1, figsize=(2.6 * (n + 1) + 0.8, 2.8 * rows), squeeze=False)
     im = axes[0][0].imshow(reference, cmap=irradiance_cmap(), norm=norm, origin="lower")
-    axes[0][0].set_title("reference", fontsize=9)
+    axes[0][0].set_title(truth_title, fontsize=9)
     for i, (p, m) in enumerate(maps, start=1):
         fit = 1.0 if p["radiometric"] else float(p.get("fit_scale", 1.0))
         axes[0][i].imshow(m * fit, cmap=irradiance_cmap(), norm=norm, origin="lower")
-        title = p["label"] + f"\ngrid {int(p['grid'])}, {p['time_ms_median']:.2f} ms"
+        title = p["label"] + f"\ngrid {int(p['grid'])}, {p['frame_ms']:.2f} ms"
         axes[0][i].set_title(title, fontsize=8)
         dm = axes[1][i].imshow(diffs[i - 1], cmap="RdBu_r", vmin=-limit, vmax=limit, origin="lower")
-        axes[1][i].set_title(f"{'fit x ' if not p['radiometric'] else ''}method - reference\n"
-                             f"nrmse {p['error']:.3f}", fontsize=8)
+        axes[1][i].set_title(f"{'fit x ' if not p['radiometric'] else ''}method - {truth_title}\n"
+                             f"{'net error' if p['error_is_net'] else 'nrmse'} {p['error']:.3f}", fontsize=8)
         if rows == 3 and os.path.exists(beauty[i - 1]):
             axes[2][i].imshow(plt.imread(beauty[i - 1]))
             axes[2][i].set_title("beauty (camera)", fontsize=8)
-    stderr = read_image(os.path.join(sweep_dir, "references", f"{scene}-f{frame_no}", "reference_stderr.exr"))
-    if stderr is not None and stderr.shape == reference.shape:
+    stderr = read_image(os.path.join(ref_dir, "reference_stderr.exr"))
+    if truth_title == "reference" and stderr is not None and stderr.shape == reference.shape:
         axes[1][0].imshow(stderr, cmap="RdBu_r", vmin=-limit, vmax=limit, origin="lower")
         axes[1][0].set_title("reference std. error", fontsize=8)
     for row in axes:

@@ -6,6 +6,53 @@ import sys
 import numpy as np
 import pandas as pd
 
+# Boolean columns of results.csv (issue 11). Skipped and failed runs leave them empty, older sweeps lack
+# them: both read as false so counts and flags never invent a condition.
+FLAGS = ("noisy_timing", "no_better_than_flat", "below_reference_noise", "consistent_with_reference",
+         "noise_target_met")
+
+
+def _truthy(series):
+    return series.astype(str).str.strip().str.lower().isin(["true", "1"])
+
+
+def _numeric(frame, column):
+    if column not in frame:
+        return pd.Series(np.nan, index=frame.index)
+    return pd.to_numeric(frame[column], errors="coerce")
+
+
+def add_derived_columns(frame):
+    """The columns every figure and table reads, whatever the sweep's age.
+
+    error          net error (reference noise removed) of the method's kind where the sweep wrote one,
+                   else the raw nrmse (radiometric) or scale-fitted nrmse (otherwise): old sweeps still report
+    error_lo/hi    its 95 % interval (NaN where only the raw error exists)
+    error_raw      the raw error of the same kind, kept beside the net one
+    error_is_net   which of the two `error` holds, so captions can say so
+    frame_ms       per-frame cost (update + render for animated scenes), else the render time
+    frame_fps      1000 / frame_ms: the fps every plot and table quotes, consistent with frame_ms
+    """
+    frame["radiometric"] = _truthy(frame["radiometric"])
+    for flag in FLAGS:
+        frame[flag] = _truthy(frame[flag]) if flag in frame else False
+    # DESIGN.md section 6: nrmse for radiometric methods, the scale-fitted nrmse otherwise (labelled "fit").
+    frame["error_raw"] = np.where(frame["radiometric"], _numeric(frame, "nrmse"), _numeric(frame, "nrmse_fit"))
+    net = _numeric(frame, "error_net")
+    frame["error_is_net"] = np.isfinite(net)
+    frame["error"] = np.where(frame["error_is_net"], net, frame["error_raw"])
+    frame["error_lo"] = np.where(frame["error_is_net"], _numeric(frame, "error_net_lo"), np.nan)
+    frame["error_hi"] = np.where(frame["error_is_net"], _numeric(frame, "error_net_hi"), np.nan)
+    for column in ("baseline_error", "noise_nrmse", "noise_target"):
+        frame[column] = _numeric(frame, column)
+    per_frame = _numeric(frame, "frame_ms_median")
+    render = _numeric(frame, "time_ms_median")
+    frame["frame_ms"] = np.where(np.isfinite(per_frame), per_frame, render)
+    with np.errstate(divide="ignore"):
+        frame["frame_fps"] = 1000.0 / frame["frame_ms"]
+    frame["label"] = np.where(frame["radiometric"], frame["method"], frame["method"] + " (fit)")
+    return frame
+
 
 def read_results(directory):
     path = os.path.join(directory, "results.csv")
@@ -16,12 +63,7 @@ def read_results(directory):
     missing = required - set(frame.columns)
     if missing:
         sys.exit(f"report: {path}: missing columns {sorted(missing)}")
-    frame["radiometric"] = frame["radiometric"].astype(str).str.lower().isin(["true", "1"])
-    # The error every figure plots: nrmse for radiometric methods, the scale-fitted nrmse otherwise
-    # (DESIGN.md section 6; always labelled "fit").
-    frame["error"] = np.where(frame["radiometric"], frame["nrmse"], frame.get("nrmse_fit", np.nan))
-    frame["label"] = np.where(frame["radiometric"], frame["method"], frame["method"] + " (fit)")
-    return frame
+    return add_derived_columns(frame)
 
 
 def read_manifest(directory):
@@ -48,6 +90,12 @@ def read_image(path):
 
 
 def ok_runs(frame):
-    """Runs with a finite error and timing: what plots and tables use."""
-    ok = frame[(frame["status"] == "ok") & np.isfinite(frame["error"]) & np.isfinite(frame["time_ms_median"])]
+    """Runs with a finite error and frame time: what plots and tables use."""
+    ok = frame[(frame["status"] == "ok") & np.isfinite(frame["error"]) & np.isfinite(frame["frame_ms"])]
     return ok.copy()
+
+
+def scene_baseline(frame, scene):
+    """The no-caustic baseline's net error on a scene: one value per scene/frame, the median over its rows."""
+    values = frame.loc[frame["scene"] == scene, "baseline_error"].dropna()
+    return float(values.median()) if not values.empty else None

@@ -18,6 +18,7 @@ except ImportError as error:  # say which module is missing and where it comes f
              f"(scripts/setup.sh does) and run with /usr/bin/python3")
 
 import figures  # noqa: E402
+import quality  # noqa: E402
 import tables  # noqa: E402
 from load import read_manifest, read_results  # noqa: E402
 
@@ -49,12 +50,31 @@ def main(argv):
     out = [f"# Sweep report: {os.path.basename(os.path.abspath(sweep_dir))}", "", context, ""]
     counts = frame["status"].value_counts().to_dict()
     out.append("Runs: " + ", ".join(f"{v} {k}" for k, v in sorted(counts.items())) + ".")
-    out.append("Errors are receiver-map nrmse against the Embree reference of the same frame; methods "
-               "marked (fit) are non-radiometric and shown after a least-squares scale fit.")
+    out.append("Errors are receiver-map errors against the truth of the same frame (analytic closed form or "
+               f"Monte Carlo reference): the {figures.NET_ERROR}, where the sweep recorded it, else the raw "
+               "nrmse. Times are " + (f"per-frame: {figures.FRAME_TIME}." if figures.has_frame_time(frame)
+                                      else "render times (this sweep records no per-frame cost).")
+               + " Methods marked (fit) are non-radiometric and measured after a least-squares scale fit.")
+    target_ratio = quality.noise_ratio_target(manifest)
+    scenes = sorted(frame["scene"].unique())
+    checks = [quality.scene_quality(frame, scene, target_ratio) for scene in scenes]
+    flagged = [q["scene"] for q in checks if q["flagged"]]
+    checked = any(q["ratio"] is not None for q in checks)
+    out.append(f"Reference noise / smallest net error must stay <= {target_ratio:.3g}: "
+               + (f"**flagged scenes: {', '.join(flagged)}**." if flagged else
+                  "every scene meets it." if checked else "not checked, this sweep records no net errors."))
+    out.append("Caveats over all ok runs: " + ", ".join(
+        f"{sum(q[key] for q in checks)} {text}" for key, text in (
+            ("below_reference_noise", "below the reference noise"), ("noisy_timing", "with noisy timing"),
+            ("no_better_than_flat", "no better than the no-caustic baseline"))) + ".")
     out.append("")
-    for scene in sorted(frame["scene"].unique()):
-        out += [f"## {scene}", ""]
-        for make in (figures.time_vs_error, figures.error_vs_iterations, figures.fps_vs_grid):
+    for scene, check in zip(scenes, checks):
+        out += [f"## {scene}", ""] + quality.scene_lines(check) + [""]
+        made = figures.time_vs_error(frame, scene, fig_dir)
+        if made:
+            paths, caption = made
+            out += [f"![{os.path.basename(paths[0])}](figures/{os.path.basename(paths[0])})", "", caption, ""]
+        for make in (figures.error_vs_iterations, figures.fps_vs_grid):
             paths = make(frame, scene, fig_dir)
             if paths:
                 out.append(f"![{os.path.basename(paths[0])}](figures/{os.path.basename(paths[0])})")

@@ -1,0 +1,133 @@
+#pragma once
+// Analytic ground truth (DESIGN.md section 5): where a scene has an exact closed form, its receiver map
+// serves as the ground truth and the Monte Carlo reference is tested against it (tests/test_analytic_truth.cpp).
+//
+// The closed form here is the refracting 1-D sine surface h(s) = A sin(k s + phase + k speed t) lit by a
+// directional light in the sine's vertical plane, at any tilt and depth (folds included): every ray stays
+// in its vertical plane, so the receiver map is a 1-D profile along the sine times the water's extent
+// across it. The profile is the exact Snell mapping s -> X(s) of fine source strips (a histogram of the
+// mapped strips, each carrying the flux the beam sends through it), which converges to the bin average of
+// E(X) = sum over preimages of (flux density at s) / |dX/ds|, the flux-conservation form of the caustic.
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "frame.hpp"
+#include "image.hpp"
+#include "receiver_chart.hpp"
+
+namespace caustics {
+
+struct AnalyticTruth {
+    bool available = false;
+    std::string kind;      // "analytic:sine" when available
+    std::string reason;    // why not, when !available
+    Image receiver;        // exact bin-averaged caustic irradiance E_c [W/m^2], chart.width() x chart.height() x 1
+};
+
+// The exact receiver map of the scene frame where a closed form applies, else available = false with the
+// reason. Applies to: one directional light; one `sine` height field of a non-dispersive dielectric and the
+// receiver (a horizontal rectangle below the water whose u or v is parallel to the sine's direction, which
+// runs along an edge of the water's rectangle); no medium; the light in the sine's vertical plane (any tilt).
+AnalyticTruth analytic_truth(const FrameGeometry& frame, const ReceiverChart& chart);
+
+// A histogram of a 1-D mapping x -> X of source strips: each strip's flux is spread uniformly over its
+// image interval [X_a, X_b], which is exact where the map is linear over the strip (fine strips).
+class StripHistogram {
+public:
+    StripHistogram(double lo, double hi, int bins)
+        : lo_(lo), bin_w_((hi - lo) / bins), bins_(bins), flux_(static_cast<std::size_t>(bins), 0.0) {}
+
+    void add(double X_a, double X_b, double flux) {
+        const double a = std::min(X_a, X_b), b = std::max(X_a, X_b);
+        const double fa = (a - lo_) / bin_w_, fb = (b - lo_) / bin_w_;
+        if (!(fb >= 0.0 && fa < bins_)) return;   // wholly outside (or NaN)
+        if (b - a < 1e-15) {                       // a focus on the strip: all flux in one bin
+            const int i = static_cast<int>(std::floor(fa));
+            if (i >= 0 && i < bins_) flux_[static_cast<std::size_t>(i)] += flux;
+            return;
+        }
+        const int i0 = std::max(0, static_cast<int>(std::floor(fa)));
+        const int i1 = std::min(bins_ - 1, static_cast<int>(std::floor(fb)));
+        if (i0 == i1) {
+            const double overlap = std::min(fb, i0 + 1.0) - std::max(fa, static_cast<double>(i0));
+            flux_[static_cast<std::size_t>(i0)] += flux * overlap / (fb - fa);
+            return;
+        }
+        for (int i = i0; i <= i1; ++i) {
+            const double overlap = std::min(fb, i + 1.0) - std::max(fa, static_cast<double>(i));
+            if (overlap > 0.0) flux_[static_cast<std::size_t>(i)] += flux * overlap / (fb - fa);
+        }
+    }
+    const std::vector<double>& flux() const { return flux_; }   // per bin; divide by the bin's measure
+    double bin_width() const { return bin_w_; }
+
+private:
+    double lo_, bin_w_;
+    int bins_;
+    std::vector<double> flux_;
+};
+
+// Flux per each of `bins` equal intervals of [lo, hi] of a 1-D mapping x0 -> map(x0) of a source of
+// density weight(x0) per unit x0 over [src_lo, src_hi], cut into `segments` equal strips (weight at the
+// strip's midpoint). Divide by the interval length for the bin-averaged density.
+template <class Map, class Weight>
+std::vector<double> bin_average_1d(Map map, Weight weight, double src_lo, double src_hi, std::size_t segments,
+                                   double lo, double hi, int bins) {
+    StripHistogram histogram(lo, hi, bins);
+    double x_prev = src_lo, X_prev = map(src_lo);
+    for (std::size_t s = 1; s <= segments; ++s) {
+        const double x = src_lo + (src_hi - src_lo) * static_cast<double>(s) / static_cast<double>(segments);
+        const double X = map(x);
+        histogram.add(X_prev, X, weight(0.5 * (x + x_prev)) * (x - x_prev));
+        x_prev = x;
+        X_prev = X;
+    }
+    return histogram.flux();
+}
+
+// The sine surface and its light in their common vertical plane: s along the sine's direction, z up.
+struct SinePlane {
+    double amplitude = 0.0, k = 1.0, offset = 0.0;  // h(s) = amplitude sin(k s + offset)
+    double base = 0.0;                              // z of the mean surface
+    double s_lo = 0.0, s_hi = 0.0;                  // the water's extent along s
+    double ior = 1.33, absorption = 0.0;            // water index (air above: 1) and Beer-Lambert Ka [1/m]
+    bool fresnel = false;                           // multiply by the unpolarised Fresnel transmittance
+    double light_s = 0.0, light_z = -1.0;           // unit direction the light travels (light_z < 0)
+    double irradiance = 1.0;                        // E0 on a plane perpendicular to the light [W/m^2]
+    double floor_z = -1.0;                          // the receiver's height (below base - |amplitude|)
+
+    double height(double s) const { return base + amplitude * std::sin(k * s + offset); }
+    double slope(double s) const { return amplitude * k * std::cos(k * s + offset); }
+
+    // The ray entering the water at s (shadowing by other crests aside).
+    struct Strip {
+        bool front = false;         // the light hits the upper side: d . n < 0
+        bool tir = false;           // no transmitted ray (index below 1 only)
+        double z = 0.0;             // surface height at s
+        double density = 0.0;       // flux per unit s and unit width reaching the floor [W/m^2]:
+                                    // E0 (d . -n_unnormalised) T_fresnel exp(-Ka L); 0 unless front
+        double landing = 0.0;       // s where the refracted ray meets the floor
+        double dir_s = 0.0, dir_z = -1.0;      // refracted direction (unit)
+        double refl_s = 0.0, refl_z = 1.0;     // reflected direction (unit)
+    };
+    Strip trace(double s) const;
+
+    // Whether the ray leaving the surface point at s along (dir_s, dir_z) meets the surface again inside
+    // the water's extent; `below` says on which side of the surface it leaves (refracted: below).
+    bool meets_surface_again(double s, double dir_s, double dir_z, bool below) const;
+};
+
+// The 1-D profile: flux per unit width landing in each of `bins` equal intervals of [lo, hi] along s
+// (shadowed and back-facing strips carry none). False with `reason` when a refracted ray (or, with
+// Fresnel, a reflected one) would meet the surface again, or the light is not transmitted downwards.
+// segments = 0 chooses the default sampling (see analytic_truth.cpp for why it suffices).
+bool sine_profile(const SinePlane& plane, double lo, double hi, int bins, std::size_t segments,
+                  std::vector<double>& flux, std::string& reason);
+
+// The default number of source strips for a profile with bins of width bin_w along s.
+std::size_t sine_profile_segments(const SinePlane& plane, double bin_w);
+
+}  // namespace caustics
