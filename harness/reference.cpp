@@ -526,17 +526,17 @@ ReferenceResult compute_reference(const RayTracer& tracer, const ReceiverChart& 
             break;
         // The next round: the photons the measured decay predicts (slope from the last two rounds; until
         // there are two, 1/2 for independent sampling and 3/4 for the scrambled Sobol' points, a little
-        // below the 0.80-0.82 measured on sine, pool and sphere), with 10 % to spare, at least twice and
-        // at most eight times the current count.
+        // below the 0.71-0.82 measured on sine, pool and sphere), with 10 % to spare, at least 1.25 and at
+        // most 8 times the current count (a round that just missed the target adds a little, not twice).
         double slope = settings.sampler == SamplerKind::Sobol ? 0.75 : 0.5;
         if (previous_n > 0 && previous_noise > result.noise_nrmse && result.noise_nrmse > 0.0)
             slope = std::clamp(std::log(previous_noise / result.noise_nrmse) /
                                    std::log(static_cast<double>(sums->per_replica) / previous_n), 0.5, 1.5);
         const double n = static_cast<double>(sums->per_replica);
-        const double predicted = result.noise_nrmse > 0.0 ? n * std::pow(result.noise_nrmse / settings.noise_target, 1.0 / slope) * 1.1 : 2.0 * n;
+        const double predicted = result.noise_nrmse > 0.0 ? n * std::pow(result.noise_nrmse / settings.noise_target, 1.0 / slope) * 1.1 : 8.0 * n;
         previous_n = sums->per_replica;
         previous_noise = result.noise_nrmse;
-        target = std::min(cap, photons_per_replica(static_cast<std::uint64_t>(std::clamp(predicted, 2.0 * n, 8.0 * n)) * settings.replicas,
+        target = std::min(cap, photons_per_replica(static_cast<std::uint64_t>(std::clamp(predicted, 1.25 * n, 8.0 * n)) * settings.replicas,
                                                    settings.replicas, lights));
     }
     result.rounds = rounds;

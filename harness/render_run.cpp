@@ -293,7 +293,8 @@ RenderRun run_method(const SceneFrame& sf, const ResolvedMethod& m, const Render
                 const Baseline baseline = make_baseline(flat_interface_baseline(sf.geometry(), sf.chart()), *truth.mean);
                 const ViewErrors e = measure_view(out.receiver, truth, nullptr, info.radiometric, &baseline.map);
                 j["error"]["receiver"] = e.json;
-                if (e.net.valid) j["below_reference_noise"] = e.net.includes_zero;
+                // Only a noisy truth can hide an error; against a closed form the question does not arise.
+                if (e.net.valid && !truth.exact()) j["below_reference_noise"] = e.net.includes_zero;
                 j["baseline"] = {{"kind", baseline.kind}, {"error", e.have_baseline ? json_number(e.baseline_error) : json(nullptr)}};
                 if (e.net.valid && e.have_baseline) {
                     j["no_better_than_flat"] = e.no_better_than_flat;

@@ -31,6 +31,14 @@ struct SineSetup {
     int bins_x = 128, bins_y = 8;
 };
 
+// Flux on the receiver [W]: sum of E * true bin area.
+inline double receiver_flux(const Image& e, const ReceiverChart& chart) {
+    double total = 0.0;
+    for (int j = 0; j < chart.height(); ++j)
+        for (int i = 0; i < chart.width(); ++i) total += e.at(i, j) * chart.bin_area(i, j);
+    return total;
+}
+
 inline Scene make_sine_scene(const SineSetup& c) {
     WaterOverFloor d;
     const double t = c.tilt_deg * kPi / 180.0;

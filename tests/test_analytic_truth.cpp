@@ -185,9 +185,7 @@ TEST(AnalyticTruth, ConservesFlux) {
         const TracedScene setup(make_sine_scene(c));
         const AnalyticTruth truth = analytic_truth(*setup.frame, *setup.chart);
         ASSERT_TRUE(truth.available) << truth.reason;
-        double total = 0.0;
-        for (int j = 0; j < c.bins_y; ++j)
-            for (int i = 0; i < c.bins_x; ++i) total += truth.receiver.at(i, j) * setup.chart->bin_area(i, j);
+        const double total = receiver_flux(truth.receiver, *setup.chart);
         const SinePlane p = plane_of(c);
         const double ct = std::cos(tilt * kPi / 180.0), st = std::sin(tilt * kPi / 180.0);
         const double xi_lo = c.water_lo * ct + p.height(c.water_lo) * st;
@@ -210,9 +208,7 @@ TEST(AnalyticTruth, ConservesFlux) {
     const TracedScene setup(make_sine_scene(c));
     const AnalyticTruth truth = analytic_truth(*setup.frame, *setup.chart);
     ASSERT_TRUE(truth.available) << truth.reason;
-    double total = 0.0;
-    for (int j = 0; j < c.bins_y; ++j)
-        for (int i = 0; i < c.bins_x; ++i) total += truth.receiver.at(i, j) * setup.chart->bin_area(i, j);
+    const double total = receiver_flux(truth.receiver, *setup.chart);
     const double cos_i = std::cos(kPi / 6), sin_t = 0.5 / 1.33, cos_t = std::sqrt(1.0 - sin_t * sin_t);   // Snell
     const double expected = cos_i * 1.2 * 1.0 * fresnel_transmittance(cos_i, cos_t, 1.0, 1.33) * std::exp(-0.5 * 0.4 / cos_t);
     EXPECT_NEAR(total, expected, 1e-6 * expected);
