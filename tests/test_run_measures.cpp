@@ -1,6 +1,9 @@
 // What one run records beside its error (issue 11): the no-caustic baseline and its flag, the truth used,
 // the per-frame time of animated scenes, and the timing rule with its dispersion figures.
+#include <unistd.h>
+
 #include <cmath>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -74,7 +77,15 @@ TEST(RunMeasures, TruthAndFrameTimeAreRecorded) {
     o.repeats = 3;
     o.timing_max_s = 0.2;
     o.progress = false;
-    o.cache_dir = ::testing::TempDir() + "caustics_run_measures_cache";
+    // A cache of its own, removed when the test ends (also on failure).
+    struct RemovedAtExit {
+        std::string path;
+        ~RemovedAtExit() {
+            std::error_code ec;
+            std::filesystem::remove_all(path, ec);
+        }
+    } cache{::testing::TempDir() + "caustics_run_measures_cache_" + std::to_string(::getpid())};
+    o.cache_dir = cache.path;
     const RenderRun analytic = run_render(o);
     ASSERT_EQ(analytic.status, "ok") << analytic.message;
     const auto& m = analytic.metrics;
