@@ -27,4 +27,10 @@ private:
     std::string key_;
 };
 
+// A bad value of a command-line option or argument, in the program's one message style:
+// "<what>: <problem>; valid: <what would be valid>" (what: the option, or the file at fault).
+inline InputError invalid_value(const std::string& what, const std::string& problem, const std::string& valid) {
+    return InputError(what, "", problem + "; valid: " + valid);
+}
+
 }  // namespace caustics

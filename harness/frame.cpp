@@ -2,9 +2,12 @@
 // height fields evaluated at the frame's time.
 #include "frame.hpp"
 
+#include <cmath>
+#include <cstdio>
 #include <string>
 
 #include "errors.hpp"
+#include "limits.hpp"
 
 namespace caustics {
 
@@ -41,6 +44,32 @@ TriangleMesh box_mesh(const Object& o) {
         {4u, 5u, 7u}, {4u, 7u, 6u},  // +z
     };
     return m;
+}
+
+// Every vertex of an object's frame geometry must be finite and within the coordinate bound (Embree's
+// float rays are refused beyond it; limits.hpp), every normal finite. The loader bounds what a scene
+// states; this catches what a generator makes of it (noise and waves heights, drops adding up).
+void check_frame_mesh(const Scene& scene, std::size_t index, const TriangleMesh& mesh, int frame) {
+    const Object& o = scene.objects[index];
+    const std::string key = "objects[" + std::to_string(index) + "]" + (o.shape == ShapeType::HeightField ? ".generator" : "");
+    auto text = [](const glm::vec3& v) {
+        char t[96];
+        std::snprintf(t, sizeof t, "(%g, %g, %g)", v.x, v.y, v.z);
+        return std::string(t);
+    };
+    const float bound = static_cast<float>(kMaxCoordinate * (1.0 + 1e-6));
+    for (const glm::vec3& p : mesh.positions) {
+        if (std::abs(p.x) <= bound && std::abs(p.y) <= bound && std::abs(p.z) <= bound) continue;
+        throw InputError(scene.path, key,
+                         "the object '" + o.name + "' reaches " + text(p) + " at frame " + std::to_string(frame) +
+                             "; valid: finite coordinates with |x|, |y|, |z| <= " + format_limit(kMaxCoordinate) +
+                             " m (geometry is single precision in Embree): lower the amplitude or base_height");
+    }
+    for (const glm::vec3& n : mesh.normals)
+        if (!(std::isfinite(n.x) && std::isfinite(n.y) && std::isfinite(n.z)))
+            throw InputError(scene.path, key,
+                             "the object '" + o.name + "' has a normal " + text(n) + " at frame " + std::to_string(frame) +
+                                 "; valid: finite normals");
 }
 
 Bounds3 mesh_bounds(const TriangleMesh& m) {
@@ -91,7 +120,10 @@ FrameGeometry build_frame_geometry(const Scene& scene, int frame) {
             break;
         }
         }
-        if (!inst.analytic_sphere) inst.bounds = mesh_bounds(inst.mesh);
+        if (!inst.analytic_sphere) {
+            check_frame_mesh(scene, k, inst.mesh, frame);
+            inst.bounds = mesh_bounds(inst.mesh);
+        }
         if (inst.bounds.valid()) {
             g.scene_bounds.extend(inst.bounds);
             if (o.material.is_specular()) g.specular_bounds.extend(inst.bounds);

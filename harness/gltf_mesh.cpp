@@ -2,6 +2,8 @@
 // TINYGLTF_IMPLEMENTATION here, DESIGN.md section 10).
 #include "gltf_mesh.hpp"
 
+#include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -25,6 +27,28 @@ bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, in
 
 [[noreturn]] void bad(const std::string& path, const std::string& what) {
     throw std::runtime_error("glTF file '" + path + "': " + what);
+}
+
+bool finite3(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+std::string triple(const glm::dvec3& v) {
+    char text[96];
+    std::snprintf(text, sizeof text, "(%g, %g, %g)", v.x, v.y, v.z);
+    return text;
+}
+
+// "mesh 'Bunny' (meshes[0]) primitive 2" for messages.
+std::string mesh_label(const tinygltf::Model& model, int mesh_index, std::size_t primitive) {
+    const std::string& name = model.meshes[static_cast<std::size_t>(mesh_index)].name;
+    return "mesh " + (name.empty() ? std::string() : "'" + name + "' ") + "(meshes[" + std::to_string(mesh_index) +
+           "]) primitive " + std::to_string(primitive);
+}
+
+// Vertices and normals must be finite (in the file, and after the node transforms in float).
+[[noreturn]] void not_finite(const std::string& path, const std::string& where, const char* what, std::size_t k,
+                             const glm::dvec3& value, const char* after) {
+    throw MeshDataError("glTF file '" + path + "': " + where + ": " + what + " " + std::to_string(k) + " is " +
+                        triple(value) + after + "; valid: finite numbers");
 }
 
 // Raw bytes and stride of an accessor, bounds-checked.
@@ -107,7 +131,9 @@ void add_mesh(const tinygltf::Model& model, int mesh_index, const glm::dmat4& m,
     if (mesh_index < 0 || static_cast<std::size_t>(mesh_index) >= model.meshes.size()) bad(path, "node names a missing mesh");
     const glm::dmat3 normal_matrix = glm::transpose(glm::inverse(glm::dmat3(m)));
     const bool flip = glm::determinant(glm::dmat3(m)) < 0.0;  // mirroring keeps triangles outward-CCW
-    for (const tinygltf::Primitive& prim : model.meshes[static_cast<std::size_t>(mesh_index)].primitives) {
+    const auto& primitives = model.meshes[static_cast<std::size_t>(mesh_index)].primitives;
+    for (std::size_t p = 0; p < primitives.size(); ++p) {
+        const tinygltf::Primitive& prim = primitives[p];
         const int mode = prim.mode < 0 ? TINYGLTF_MODE_TRIANGLES : prim.mode;
         if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP && mode != TINYGLTF_MODE_TRIANGLE_FAN) continue;
         auto pos_it = prim.attributes.find("POSITION");
@@ -132,11 +158,23 @@ void add_mesh(const tinygltf::Model& model, int mesh_index, const glm::dmat4& m,
             if (i >= positions.size()) bad(path, "an index is out of range of its vertices");
         const auto base = static_cast<std::uint32_t>(acc.mesh.positions.size());
         for (std::size_t k = 0; k < positions.size(); ++k) {
-            acc.mesh.positions.push_back(glm::vec3(m * glm::dvec4(glm::dvec3(positions[k]), 1.0)));
+            if (!finite3(positions[k]))
+                not_finite(path, mesh_label(model, mesh_index, p), "POSITION", k, glm::dvec3(positions[k]), "");
+            const glm::vec3 world(m * glm::dvec4(glm::dvec3(positions[k]), 1.0));
+            if (!finite3(world))
+                not_finite(path, mesh_label(model, mesh_index, p), "POSITION", k, glm::dvec3(world),
+                           " after the node transforms");
+            acc.mesh.positions.push_back(world);
             if (!normals.empty()) {
+                if (!finite3(normals[k]))
+                    not_finite(path, mesh_label(model, mesh_index, p), "NORMAL", k, glm::dvec3(normals[k]), "");
                 const glm::dvec3 n = normal_matrix * glm::dvec3(normals[k]);
                 const double len = glm::length(n);
-                acc.mesh.normals.push_back(len > 0.0 ? glm::vec3(n / len) : glm::vec3(0.0f, 0.0f, 1.0f));
+                const glm::vec3 unit = len > 0.0 ? glm::vec3(n / len) : glm::vec3(0.0f, 0.0f, 1.0f);
+                if (!finite3(unit))
+                    not_finite(path, mesh_label(model, mesh_index, p), "NORMAL", k, glm::dvec3(unit),
+                               " after the node transforms");
+                acc.mesh.normals.push_back(unit);
             } else {
                 acc.mesh.normals.push_back(glm::vec3(0.0f));  // dropped below if any primitive lacks normals
             }

@@ -2,7 +2,9 @@
 // A height field sampled on a regular grid of vertices: z(i, j) = height[j * nx + i] at world
 // (origin.x + i * spacing.x, origin.y + j * spacing.y). Gradients are stored per vertex (analytic where
 // the generator has them) so that refraction can use smooth interpolated normals.
+#include <cstddef>
 #include <functional>
+#include <string>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -36,6 +38,24 @@ struct HeightField {
     // Two triangles per cell, counter-clockwise seen from above, with per-vertex upward normals.
     TriangleMesh triangulate() const;
 };
+
+// A height map image (the `image` generator): its size from the header, and its first channel decoded as
+// floats (8/16-bit images read as [0, 1]). Both throw std::runtime_error with a one-line message naming
+// the file (a truncated or corrupt file included) and keep the image libraries' own text (libpng's
+// "libpng error: ...") off stderr.
+struct HeightMapInfo {
+    int width = 0;
+    int height = 0;
+    int channels = 0;
+    std::size_t bytes_per_channel = 0;
+    // What decoding holds at its peak: the file's native pixels (the PNG reader keeps the whole image)
+    // and the first channel as floats.
+    double decode_bytes() const {
+        return static_cast<double>(width) * height * (4.0 + static_cast<double>(channels) * bytes_per_channel);
+    }
+};
+HeightMapInfo read_height_map_info(const std::string& path);
+std::vector<float> read_height_map(const std::string& path, HeightMapInfo& info);
 
 // Evaluates the height-field generator of `desc` at time t (seconds) for animation frame `frame`
 // (the `waves` simulation steps deterministically to that frame). Same result on every machine.

@@ -72,6 +72,23 @@ void check_embree(const char* what) {
 
 glm::dvec3 to_d(const glm::vec3& v) { return {v.x, v.y, v.z}; }
 
+// Embree asserts (aborts the process) on a ray whose origin or direction is not finite or beyond
+// ~1.8e18, or whose tnear/tfar is NaN. The scene bounds (limits.hpp: |x| <= 1e5 m) keep every ray the
+// harness casts far inside that, so such a ray is a bug upstream: it becomes an internal failure that
+// names the ray (exit 1), not an abort.
+bool valid_ray(const glm::dvec3& o, const glm::dvec3& d, double tmin, double tmax) {
+    constexpr double kLarge = 1e18;
+    return std::abs(o.x) <= kLarge && std::abs(o.y) <= kLarge && std::abs(o.z) <= kLarge && std::abs(d.x) <= kLarge &&
+           std::abs(d.y) <= kLarge && std::abs(d.z) <= kLarge && tmin >= 0.0 && !std::isnan(tmax);
+}
+
+[[noreturn]] void invalid_ray(const char* what, const glm::dvec3& o, const glm::dvec3& d, double tmin, double tmax) {
+    char text[256];
+    std::snprintf(text, sizeof text, "RayTracer::%s: invalid ray origin (%g, %g, %g) direction (%g, %g, %g) t in (%g, %g)",
+                  what, o.x, o.y, o.z, d.x, d.y, d.z, tmin, tmax);
+    throw std::runtime_error(text);
+}
+
 // +1 if Embree's triangle Ng points along (v1 - v0) x (v2 - v0) (our outward normal), -1 if opposite.
 // Measured once on a one-triangle scene rather than assumed (Embree documents (v0 - v1) x (v2 - v0)).
 double embree_ng_sign() {
@@ -186,6 +203,8 @@ void* RayTracer::embree_scene() const { return impl_->scene; }
 
 Hit RayTracer::intersect(const glm::dvec3& origin, const glm::dvec3& dir, double tmin, double tmax) const {
     tmin = std::max(tmin, impl_->min_tmin);
+    if (!valid_ray(origin, dir, tmin, tmax)) [[unlikely]]
+        invalid_ray("intersect", origin, dir, tmin, tmax);
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     RTCRayHit rh;
@@ -262,6 +281,8 @@ Hit RayTracer::intersect(const glm::dvec3& origin, const glm::dvec3& dir, double
 bool RayTracer::occluded(const glm::dvec3& origin, const glm::dvec3& dir, double tmin, double tmax) const {
     tmin = std::max(tmin, impl_->min_tmin);
     if (!(tmax > tmin)) return false;
+    if (!valid_ray(origin, dir, tmin, tmax)) [[unlikely]]
+        invalid_ray("occluded", origin, dir, tmin, tmax);
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     RTCRay ray;

@@ -11,6 +11,14 @@
 // of E_c from its n photons; E = mean(E_r) and se^2 = sum (E_r - E)^2 / (R (R - 1)). The points within
 // one replica are dependent (quasi-Monte Carlo), the replicas are independent randomizations.
 //
+// No result that could not be produced (issue 12): a reference whose lights emit no flux, or whose flux
+// leaves nothing in any receiver bin, would read as an exact all-zero map with noise 0 and make every
+// error 0. Whether flux reaches the receiver is a property of the scene (and the photon count), fixed
+// before anything runs, so such a reference is bad input: an InputError (exit 2) naming the scene file
+// and `receiver.object`, with the flux ledger that says where the light went, thrown before the result
+// exists, so nothing is cached or written. A reference that traced no photon at all is an internal
+// failure (exit 1). reference_cache.cpp never stores or serves an empty entry either.
+//
 // Bump kReferenceVersion (reference_cache.cpp) whenever the transport or the estimators change.
 #include "reference.hpp"
 
@@ -29,7 +37,9 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include "errors.hpp"
 #include "hash.hpp"
+#include "limits.hpp"
 #include "photon_sampler.hpp"
 #include "photon_source.hpp"
 #include "progress.hpp"
@@ -442,6 +452,30 @@ ReferenceResult finish_reference(const Transport& transport, const ReceiverChart
     return result;
 }
 
+// Throws unless the reference measured something (see the file comment).
+void require_measurable(const Scene& scene, const ReferenceSums& sums, const ReferenceResult& result) {
+    if (sums.per_replica == 0 || result.photons == 0)
+        throw std::runtime_error("reference: no photon was traced (" + std::to_string(result.photons) + " photons)");
+    const std::string receiver = scene.receiver.object;
+    const FluxLedger& l = result.ledger;
+    auto watts = [](double w) { return format_limit(w) + " W"; };
+    if (!(l.emitted > 0.0) || !std::isfinite(l.emitted))
+        throw InputError(scene.path, "lights",
+                         "the lights emitted no flux toward the scene's objects (" + watts(l.emitted) + " from " +
+                             std::to_string(result.photons) +
+                             " photons); a reference would be all zeros; valid: lights that reach the objects");
+    if (std::any_of(sums.bin_sums.begin(), sums.bin_sums.end(), [](std::int64_t v) { return v != 0; })) return;
+    throw InputError(scene.path, "receiver.object",
+                     "no caustic flux reached a bin of the receiver '" + receiver + "' from " +
+                         std::to_string(result.photons) + " photons (of " + watts(l.emitted) + " emitted: on the receiver " +
+                         watts(l.deposited_receiver) + ", on other objects " + watts(l.deposited_other) +
+                         ", direct without a specular event " + watts(l.direct) + ", escaped " + watts(l.escaped) +
+                         ", absorbed " + watts(l.absorbed) + ", past max_specular_depth " + watts(l.truncated) +
+                         "); its reference would be all zeros with noise 0 and every error 0; valid: a scene whose "
+                         "light reaches the receiver through a specular object (check the light's direction and "
+                         "position, the objects' positions and absorption), or more --photons");
+}
+
 // What the result says about how it was asked for and made.
 void label_result(ReferenceResult& result, const Scene& scene, int frame, const ReferenceSettings& settings,
                   bool camera_view) {
@@ -459,8 +493,11 @@ void label_result(ReferenceResult& result, const Scene& scene, int frame, const 
 std::uint64_t photons_per_replica(std::uint64_t photons, int replicas, std::size_t lights) {
     const std::uint64_t r = static_cast<std::uint64_t>(std::max(1, replicas));
     const std::uint64_t l = std::max<std::uint64_t>(1, lights);
-    const std::uint64_t per = (photons + r - 1) / r;
-    return (per + l - 1) / l * l;
+    // Rounded up without overflow (photons + r - 1 wraps for counts near 2^64, which traced nothing).
+    const std::uint64_t per = photons / r + (photons % r != 0 ? 1 : 0);
+    const std::uint64_t rest = per % l;
+    if (rest == 0) return per;
+    return per <= std::numeric_limits<std::uint64_t>::max() - (l - rest) ? per + (l - rest) : per - rest;
 }
 
 ReferenceResult compute_reference(const RayTracer& tracer, const ReceiverChart& chart,
@@ -474,6 +511,9 @@ ReferenceResult compute_reference(const RayTracer& tracer, const ReceiverChart& 
     if (settings.replicas < 2 || settings.replicas > ReferenceSettings::kMaxReplicas)
         throw std::runtime_error("reference: replicas must be in [2, " + std::to_string(ReferenceSettings::kMaxReplicas) + "]");
     const bool camera_view = camera != nullptr && settings.camera_view;
+    // The sums, one copy per worker thread, and the images against the memory ceiling before any of
+    // them is allocated (limits.hpp; the scene loader checked the default replicas already).
+    check_scene_memory(scene, settings.replicas, worker_threads());
 
     std::unique_ptr<CameraModel> camera_model;
     const Transport transport = make_transport(tracer, chart, camera_view ? camera : nullptr, settings, camera_model);
@@ -494,6 +534,16 @@ ReferenceResult compute_reference(const RayTracer& tracer, const ReceiverChart& 
 
     const std::size_t lights = scene.lights.size();
     const std::uint64_t cap = photons_per_replica(std::max(settings.photon_cap, settings.photons), settings.replicas, lights);
+    // One bin of one replica sums up to 2^30 per photon in 64 bits: at most 2^33 photons per replica.
+    constexpr std::uint64_t kMaxPerReplica = std::uint64_t{1} << 33;
+    const std::uint64_t most = settings.noise_target > 0.0 ? cap : photons_per_replica(settings.photons, settings.replicas, lights);
+    if (most > kMaxPerReplica)
+        throw invalid_value(settings.noise_target > 0.0 ? "--photon-cap" : "--photons",
+                            std::to_string(most) + " photons per replica overflow the fixed-point bin sums",
+                            "at most 2^33 = " + std::to_string(kMaxPerReplica) + " photons per replica (" +
+                                std::to_string(settings.replicas) + " replicas: " +
+                                std::to_string(kMaxPerReplica * static_cast<std::uint64_t>(settings.replicas)) +
+                                " photons)");
     std::uint64_t target = photons_per_replica(settings.photons, settings.replicas, lights);
     if (settings.noise_target > 0.0) target = std::min(target, cap);
     ReferenceResult result;
@@ -539,6 +589,7 @@ ReferenceResult compute_reference(const RayTracer& tracer, const ReceiverChart& 
         target = std::min(cap, photons_per_replica(static_cast<std::uint64_t>(std::clamp(predicted, 1.25 * n, 8.0 * n)) * settings.replicas,
                                                    settings.replicas, lights));
     }
+    require_measurable(scene, *sums, result);
     result.rounds = rounds;
     result.round_photons = std::move(round_photons);
     result.round_noise = std::move(round_noise);

@@ -16,6 +16,7 @@
 
 #include "camera.hpp"
 #include "frame.hpp"
+#include "hash.hpp"
 #include "image.hpp"
 #include "photon_sampler.hpp"
 #include "receiver_chart.hpp"
@@ -109,6 +110,10 @@ ReferenceResult reference_from_sums(const RayTracer& tracer, const ReceiverChart
 
 // Photons per replica for a requested total: rounded up to a multiple of `lights`.
 std::uint64_t photons_per_replica(std::uint64_t photons, int replicas, std::size_t lights);
+
+// Adds the scene file's bytes and every asset's bytes (the name of one that cannot be read) to `h`:
+// what makes two loads of a scene the same input.
+void hash_scene_contents(Hash128& h, const Scene& scene);
 
 // The cache key: a hash of the scene file bytes and every asset's bytes, the frame, seed, sampler,
 // replicas, camera_view and the reference code version (not the photon count: entries of one key

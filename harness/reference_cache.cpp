@@ -7,6 +7,8 @@
 //   | u64 payload size | payload | u64 checksum64(payload)
 // Anything that does not match exactly (truncation, flipped bits, another version, another key) makes
 // the entry stale: it is recomputed and rewritten (temporary name, then rename), never used.
+// An empty reference (no flux emitted, or nothing in any receiver bin) is never stored, and one found
+// in the cache (written before such references became errors) is stale: compute_reference refuses it.
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -95,6 +97,8 @@ private:
 std::string serialize_payload(const ReferenceResult& r) {
     const ReferenceSums& sums = *r.sums;
     Writer w;
+    // Sized exactly: growing by doubling held up to three times the sums at once.
+    w.out.reserve(64 + (sums.bin_sums.size() + sums.pixel_sums.size()) * sizeof(std::int64_t) + 10 * sizeof(double));
     w.u64(sums.per_replica);
     w.u32(sums.replicas);
     w.u32(sums.lights);
@@ -149,6 +153,7 @@ CachedEntry parse_payload(Reader& in) {
 std::string encode_file(const ReferenceResult& r, const std::string& key) {
     const std::string payload = serialize_payload(r);
     Writer w;
+    w.out.reserve(sizeof kMagic + 32 + key.size() + payload.size());
     w.raw(kMagic, sizeof kMagic);
     w.u32(kFileFormat);
     w.u32(kReferenceVersion);
@@ -186,12 +191,17 @@ bool decode_file(const std::string& bytes, const std::string& key, CachedEntry& 
     }
 }
 
+// Whether the sums measured anything: flux emitted and some receiver bin non-zero (reference.cpp).
+bool measured_something(const ReferenceSums& sums) {
+    if (!(sums.ledger_units.emitted > 0.0)) return false;
+    for (const std::int64_t v : sums.bin_sums)
+        if (v != 0) return true;
+    return false;
+}
+
 }  // namespace
 
-std::string reference_cache_key(const Scene& scene, int frame, const ReferenceSettings& settings) {
-    Hash128 h;
-    h.text("caustics-reference");
-    h.u64(kReferenceVersion);
+void hash_scene_contents(Hash128& h, const Scene& scene) {
     h.text(scene.source_text);
     h.u64(scene.assets.size());
     for (const std::string& asset : scene.assets) {
@@ -204,6 +214,13 @@ std::string reference_cache_key(const Scene& scene, int frame, const ReferenceSe
             h.text(asset);
         }
     }
+}
+
+std::string reference_cache_key(const Scene& scene, int frame, const ReferenceSettings& settings) {
+    Hash128 h;
+    h.text("caustics-reference");
+    h.u64(kReferenceVersion);
+    hash_scene_contents(h, scene);
     h.u64(static_cast<std::uint64_t>(frame));
     h.u64(settings.seed);
     h.text(sampler_name(settings.sampler));
@@ -256,7 +273,8 @@ std::shared_ptr<const ReferenceSums> read_entry(const EntryFile& file, const std
     CachedEntry entry;
     if (read_file_bytes(file.path.string(), bytes) && decode_file(bytes, key, entry) && entry.sums->bins == bins &&
         entry.sums->pixels == pixels && entry.sums->replicas == static_cast<std::uint32_t>(settings.replicas) &&
-        entry.sums->lights == lights && entry.sums->per_replica * entry.sums->replicas == file.photons) {
+        entry.sums->lights == lights && entry.sums->per_replica * entry.sums->replicas == file.photons &&
+        measured_something(*entry.sums)) {
         noise = entry.noise_nrmse;
         return entry.sums;
     }
@@ -267,6 +285,8 @@ std::shared_ptr<const ReferenceSums> read_entry(const EntryFile& file, const std
 }
 
 void store_entry(const ReferenceResult& result, const std::string& key, const std::string& cache_dir) {
+    // compute_reference refuses an empty reference; this keeps one out of the cache whatever its caller.
+    if (!result.sums || !measured_something(*result.sums)) return;
     // Store atomically. A cache that cannot be written costs time later, not correctness now.
     std::error_code ec;
     fs::create_directories(cache_dir, ec);

@@ -1,9 +1,14 @@
 #include "report_front.hpp"
 
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
-#include <cstdlib>
+#include <cerrno>
 #include <filesystem>
+#include <vector>
 
 #include "errors.hpp"
 
@@ -12,16 +17,39 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string quoted(const std::string& s) {
-    std::string q = "'";
-    for (char c : s) q += (c == '\'') ? std::string("'\\''") : std::string(1, c);
-    return q + "'";
+// Runs `argv` (argv[0] a path, or a name looked up on PATH) and waits for it; returns its exit code, or 1
+// if it could not start or ended on a signal. The child dies with this process (PR_SET_PDEATHSIG, checked
+// against the race of a parent that died before the prctl took effect), so a killed `caustics report`
+// leaves no script running that would write the report later. `quiet` sends its output to /dev/null.
+int run_tied_child(const std::vector<std::string>& argv, bool quiet) {
+    std::vector<char*> args;
+    for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+    args.push_back(nullptr);
+    const pid_t parent = getpid();
+    const pid_t pid = fork();
+    if (pid < 0) return 1;
+    if (pid == 0) {
+        if (prctl(PR_SET_PDEATHSIG, SIGKILL) != 0) _exit(127);
+        if (getppid() != parent) _exit(127);   // the parent died before the prctl took effect
+        if (quiet) {
+            const int null_fd = open("/dev/null", O_WRONLY);
+            if (null_fd >= 0) {
+                dup2(null_fd, STDOUT_FILENO);
+                dup2(null_fd, STDERR_FILENO);
+                close(null_fd);
+            }
+        }
+        execvp(args[0], args.data());
+        _exit(127);
+    }
+    int status = 0;
+    while (waitpid(pid, &status, 0) < 0)
+        if (errno != EINTR) return 1;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 1;
 }
 
 bool has_plotting_modules(const std::string& python) {
-    const std::string probe = quoted(python) +
-        " -c 'import matplotlib, pandas, numpy, OpenImageIO' >/dev/null 2>&1";
-    return std::system(probe.c_str()) == 0;
+    return run_tied_child({python, "-c", "import matplotlib, pandas, numpy, OpenImageIO"}, true) == 0;
 }
 
 }  // namespace
@@ -41,10 +69,7 @@ int run_report(const std::string& dir) {
                          "no python3 with matplotlib, pandas, numpy and OpenImageIO; run scripts/setup.sh "
                          "(Debian packages python3-matplotlib python3-pandas python3-numpy python3-openimageio)");
     const fs::path script = fs::path(CAUSTICS_SOURCE_DIR) / "scripts" / "report" / "report.py";
-    const std::string command = quoted(python) + " " + quoted(script.string()) + " " + quoted(dir);
-    const int status = std::system(command.c_str());
-    if (status == -1) return 1;
-    return WIFEXITED(status) ? WEXITSTATUS(status) : 1;
+    return run_tied_child({python, script.string(), dir}, false);
 }
 
 }  // namespace caustics

@@ -18,6 +18,7 @@
 
 #include "analytic_truth.hpp"
 #include "errors.hpp"
+#include "hash.hpp"
 #include "image_io.hpp"
 #include "registry.hpp"
 #include "render_run.hpp"
@@ -51,7 +52,7 @@ ChildResult run_child(const std::vector<std::string>& argv, const std::string& l
     const pid_t pid = fork();
     if (pid < 0) throw std::runtime_error("sweep: fork failed");
     if (pid == 0) {
-        prctl(PR_SET_PDEATHSIG, SIGKILL);
+        if (prctl(PR_SET_PDEATHSIG, SIGKILL) != 0) _exit(127);
         if (getppid() != parent) _exit(127);   // the parent died before prctl took effect
         const int fd = open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
         if (fd >= 0) {
@@ -156,6 +157,153 @@ std::string number_text(double v) {
     char buf[40];
     std::snprintf(buf, sizeof buf, "%.17g", v);
     return buf;
+}
+
+// ----- The plan a sweep folder records (manifest.json "plan", "plan_hash") -----
+
+constexpr int kPlanVersion = 1;
+
+// An axis value's canonical text as JSON (a number or boolean where it reads as one), for readable plans.
+json value_json(const std::string& canonical) {
+    const json v = json::parse(canonical, nullptr, false);
+    return v.is_discarded() || !v.is_primitive() || v.is_null() ? json(canonical) : v;
+}
+
+// The scene file's bytes and every asset's bytes: an edited scene is another plan.
+std::string scene_content_hash(const Scene& scene) {
+    Hash128 h;
+    hash_scene_contents(h, scene);
+    return h.hex();
+}
+
+// Everything that decides what a run measures and against what: per scene (by name) its file contents,
+// frames, reference noise target and truth; the reference settings; the timing protocol (with the
+// per-run time limit and threads in effect); every method's axis values; and the runs themselves (count
+// and a hash of every run's id, scene, frame, method and parameters). Not the description, the report
+// settings, the spec's file name or folder, the cache folder: those may change on --resume.
+json sweep_plan(const SweepSpec& spec, const std::vector<PlannedRun>& runs, const std::vector<std::string>& scene_hashes,
+                int threads, double timeout_s) {
+    json plan;
+    plan["version"] = kPlanVersion;
+    json scenes = json::object();
+    for (std::size_t i = 0; i < spec.scenes.size(); ++i) {
+        const SweepScene& scene = spec.scenes[i];
+        scenes[fs::path(scene.path).stem().string()] = {
+            {"file_hash", scene_hashes[i]},
+            {"frames", scene.frames},
+            {"noise_target", scene.noise_target >= 0.0 ? scene.noise_target : spec.noise_target},
+            {"truth", scene.truth.empty() ? spec.truth : scene.truth}};
+    }
+    plan["scenes"] = scenes;
+    plan["reference"] = {{"photons", spec.photons}, {"seed", spec.seed}, {"photon_cap", spec.photon_cap},
+                         {"sampler", spec.sampler}, {"replicas", spec.replicas}};
+    plan["timing"] = {{"warmup", spec.warmup}, {"repeats", spec.repeats}, {"precision", spec.timing_precision},
+                      {"max_time_s", spec.timing_max_s}, {"timeout_s", timeout_s}, {"threads", threads}};
+    json methods = json::object();
+    for (const auto& m : spec.methods) {
+        json axes = json::object();
+        for (const auto& a : m.axes) {
+            json values = json::array();
+            for (const auto& v : a.values) values.push_back(value_json(v));
+            axes[a.name] = values;
+        }
+        methods[m.method] = axes;
+    }
+    plan["methods"] = methods;
+    Hash128 h;
+    for (const PlannedRun& run : runs) {
+        h.text(run.id);
+        h.text(run.scene_name);
+        h.u64(static_cast<std::uint64_t>(run.frame));
+        h.text(run.method);
+        h.u64(run.params.size());
+        for (const auto& [k, v] : run.params) {
+            h.text(k);
+            h.text(v);
+        }
+        h.f64(run.noise_target);
+        h.text(run.truth);
+    }
+    plan["runs"] = {{"count", runs.size()}, {"hash", h.hex()}};
+    return plan;
+}
+
+std::string plan_hash(const json& plan) {
+    Hash128 h;
+    h.text(plan.dump());
+    return h.hex();
+}
+
+std::string brief(const json& v) {
+    std::string s = v.dump();
+    return s.size() > 80 ? s.substr(0, 77) + "..." : s;
+}
+
+// "key.path: <in the folder> in the folder, <now> now" for every leaf that differs.
+void differences(const json& was, const json& now, const std::string& path, std::vector<std::string>& out) {
+    if (was.is_object() && now.is_object()) {
+        std::set<std::string> keys;
+        for (const auto& [k, v] : was.items()) keys.insert(k);
+        for (const auto& [k, v] : now.items()) keys.insert(k);
+        for (const auto& k : keys) {
+            const std::string sub = path.empty() ? k : path + "." + k;
+            if (!was.contains(k)) out.push_back(sub + ": absent in the folder, " + brief(now[k]) + " now");
+            else if (!now.contains(k)) out.push_back(sub + ": " + brief(was[k]) + " in the folder, absent now");
+            else differences(was[k], now[k], sub, out);
+        }
+    } else if (was != now) {
+        out.push_back((path.empty() ? std::string("plan") : path) + ": " + brief(was) + " in the folder, " + brief(now) + " now");
+    }
+}
+
+std::string listed(const std::vector<std::string>& items) {
+    std::string text;
+    for (std::size_t i = 0; i < items.size() && i < 3; ++i) text += (i ? "; " : "") + items[i];
+    if (items.size() > 3) text += "; and " + std::to_string(items.size() - 3) + " more";
+    return text;
+}
+
+// For --resume: the folder's manifest when the sweep in it was started with this plan (an empty object
+// when the folder holds no sweep yet); throws InputError naming what differs otherwise, or when the folder
+// holds results whose plan cannot be told. Reads only.
+json check_resume(const fs::path& dir, const json& plan, const SweepSpec& spec) {
+    const fs::path manifest_path = dir / "manifest.json";
+    std::error_code ec;
+    const auto refuse = [&](const std::string& why) {
+        return InputError("--resume", dir.string(), why + "; resume with the spec (and --axis, --threads, --timeout) "
+                                                          "it was started with, or choose another --out folder");
+    };
+    if (!fs::exists(manifest_path, ec)) {
+        if (fs::exists(dir / "results.jsonl", ec))
+            throw refuse("the folder holds results.jsonl but no manifest.json, so the plan its rows were measured "
+                         "with cannot be checked");
+        return json::object();
+    }
+    std::ifstream in(manifest_path, std::ios::binary);
+    const json manifest = json::parse(in, nullptr, false);
+    if (manifest.is_discarded() || !manifest.is_object())
+        throw refuse("manifest.json is not readable JSON, so the plan the sweep was started with cannot be checked");
+    std::vector<std::string> diff;
+    if (manifest.contains("plan")) {
+        json was = manifest["plan"], current = plan;
+        const json was_runs = was.value("runs", json()), now_runs = current.value("runs", json());
+        was.erase("runs");
+        current.erase("runs");
+        differences(was, current, "", diff);
+        if (diff.empty()) differences(was_runs, now_runs, "runs", diff);   // derived: named only alone
+    } else if (manifest.contains("spec")) {
+        // A folder from before plans were recorded: the spec as run must be the same.
+        json was = manifest["spec"], current = spec.as_run;
+        for (const char* free : {"description", "report"}) {
+            if (was.is_object()) was.erase(free);
+            if (current.is_object()) current.erase(free);
+        }
+        differences(was, current, "spec", diff);
+    } else {
+        throw refuse("manifest.json records neither the plan nor the spec the sweep was started with");
+    }
+    if (!diff.empty()) throw refuse("the sweep in this folder was started with another plan: " + listed(diff));
+    return manifest;
 }
 
 // The reference the run's children will ask for, so the parent's computation fills their cache entry.
@@ -265,22 +413,23 @@ std::string results_csv(const SweepSpec& spec, const std::vector<json>& rows) {
     add("message", {"message"});
 
     std::string out;
-    for (std::size_t c = 0; c < columns.size(); ++c) out += (c ? "," : "") + columns[c].name;
+    for (std::size_t c = 0; c < columns.size(); ++c) out.append(c ? "," : "").append(columns[c].name);
     out += "\n";
     for (const auto& row : rows) {
-        for (std::size_t c = 0; c < columns.size(); ++c) out += (c ? "," : "") + csv_field(columns[c].get(row));
+        for (std::size_t c = 0; c < columns.size(); ++c) out.append(c ? "," : "").append(csv_field(columns[c].get(row)));
         out += "\n";
     }
     return out;
 }
 
 SweepSummary run_sweep(const SweepOptions& options) {
-    const SweepSpec spec = load_sweep_spec(options.spec_path, options.axis_overrides);
-    const std::vector<PlannedRun> runs = plan_runs(spec);
-    if (runs.size() > kMaxRunsWithoutConfirmation && !options.yes)
+    const SweepSpec spec = load_sweep_spec(options.spec_path, options.axis_overrides);   // at most kMaxSweepRuns
+    const std::uint64_t planned = count_runs(spec);
+    if (planned > kMaxRunsWithoutConfirmation && !options.yes)
         throw InputError(options.spec_path, "methods",
-                         "the sweep has " + std::to_string(runs.size()) + " runs (more than " +
+                         "the sweep has " + std::to_string(planned) + " runs (more than " +
                              std::to_string(kMaxRunsWithoutConfirmation) + "); pass --yes to run it anyway");
+    const std::vector<PlannedRun> runs = plan_runs(spec);
     if (options.out_dir.empty()) throw InputError("--out", "", "a sweep needs an output folder");
     const fs::path dir(options.out_dir);
     const fs::path jsonl = dir / "results.jsonl";
@@ -288,13 +437,26 @@ SweepSummary run_sweep(const SweepOptions& options) {
     if (!options.resume && fs::exists(jsonl, ec))
         throw InputError("--out", options.out_dir, "already holds a sweep; pass --resume to continue it or choose another folder");
     // Every scene must load before anything runs: a malformed scene is bad input of the whole sweep.
-    for (const auto& scene : spec.scenes) (void)load_scene(scene.path);
+    std::vector<std::string> scene_hashes;
+    for (const auto& scene : spec.scenes) scene_hashes.push_back(scene_content_hash(load_scene(scene.path)));
+    const double timeout = options.timeout_s > 0.0 ? options.timeout_s : spec.timeout_s;
+    const json plan = sweep_plan(spec, runs, scene_hashes, options.threads, timeout);
 
+    // A resumed sweep must continue the plan it was started with: checked before any file is written.
+    json manifest = options.resume ? check_resume(dir, plan, spec) : json::object();
+    if (manifest.empty()) {
+        manifest = run_context();
+        manifest["spec_path"] = options.spec_path;
+        manifest["spec"] = spec.as_run;
+        manifest["runs_planned"] = runs.size();
+    } else {
+        json resumed = run_context();
+        resumed["spec_path"] = options.spec_path;
+        manifest["resumed"].push_back(resumed);
+    }
+    manifest["plan"] = plan;
+    manifest["plan_hash"] = plan_hash(plan);
     fs::create_directories(dir / "runs");
-    json manifest = run_context();
-    manifest["spec_path"] = options.spec_path;
-    manifest["spec"] = spec.as_run;
-    manifest["runs_planned"] = runs.size();
     write_text_atomic((dir / "manifest.json").string(), manifest.dump(2) + "\n");
 
     std::vector<std::string> lines = read_result_lines(jsonl);
@@ -313,7 +475,6 @@ SweepSummary run_sweep(const SweepOptions& options) {
     summary.done_before = finished.size();
     const std::string program = options.render_program.empty() ? self_executable() : options.render_program;
     const std::string cache = options.cache_dir.empty() ? default_cache_dir() : options.cache_dir;
-    const double timeout = options.timeout_s > 0.0 ? options.timeout_s : spec.timeout_s;
     const auto start = std::chrono::steady_clock::now();
     std::set<std::string> references_done;
 

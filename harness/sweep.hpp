@@ -6,11 +6,21 @@
 // (PR_SET_PDEATHSIG). References are computed once per scene and frame by the sweep itself, through the
 // on-disk cache that the children then read.
 //
-// Files: DIR/manifest.json (context + spec as run), DIR/results.jsonl (one line per finished run, the
-// source of truth), DIR/results.csv (derived from it), DIR/references/<scene>-f<frame>/, DIR/runs/<id>/.
-// A finished run's line is never rewritten: results.jsonl is replaced atomically with the old lines
-// copied byte for byte plus the new one, so a sweep killed at any moment keeps every finished run, and
-// --resume redoes only runs without a line.
+// Files: DIR/manifest.json (context + spec as run + the plan and its hash), DIR/results.jsonl (one line
+// per finished run, the source of truth), DIR/results.csv (derived from it), DIR/references/<scene>-f<frame>/,
+// DIR/runs/<id>/. A finished run's line is never rewritten: results.jsonl is replaced atomically with the
+// old lines copied byte for byte plus the new one, so a sweep killed at any moment keeps every finished
+// run, and --resume redoes only runs without a line.
+//
+// The plan (manifest.json "plan", hashed as "plan_hash") is everything that decides what a run measures
+// and against what: per scene its file contents (and assets), frames, reference noise target and truth;
+// the reference settings (photons, seed, photon cap, sampler, replicas); the timing protocol (warm-up,
+// repeats, precision, time cap, per-run time limit, threads); every method's axis values; and the runs
+// (count and a hash of every run's id and parameters). --resume with another plan is refused (InputError
+// naming what differs, e.g. "scenes.pool.noise_target: 0.003 in the folder, 0.002 now") before any file
+// is written; so is --resume of a folder with results but no readable manifest. A folder from before
+// plans were recorded is compared by its spec (description and report settings aside). A resume with the
+// same plan keeps the manifest and appends its own context to "resumed".
 #include <string>
 #include <vector>
 
@@ -39,8 +49,9 @@ struct SweepSummary {
     std::size_t total = 0, done_before = 0, ran = 0, ok = 0, skipped = 0, failed = 0, unstable = 0;
 };
 
-// Throws InputError for a bad spec, a sweep too large without --yes, or an existing sweep directory
-// without --resume.
+// Throws InputError for a bad spec, a sweep of more than kMaxRunsWithoutConfirmation runs without --yes
+// (or more than kMaxSweepRuns at all), an existing sweep directory without --resume, or --resume with
+// another plan.
 SweepSummary run_sweep(const SweepOptions& options);
 
 // results.csv from the JSON lines (the columns depend only on the spec's methods, so a resumed sweep

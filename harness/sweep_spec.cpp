@@ -1,11 +1,15 @@
 #include "sweep_spec.hpp"
 
+#include <bit>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <limits>
+#include <map>
 #include <set>
 #include <sstream>
+#include <unordered_set>
 
 #include "errors.hpp"
 #include "registry.hpp"
@@ -63,6 +67,45 @@ long long require_integer(const json& v, const std::string& file, const std::str
     return v.get<long long>();
 }
 
+const std::string kIntegerBound = "+-9007199254740992 (2^53, the largest integer a double holds exactly; "
+                                  "results.csv and the report read numbers as doubles)";
+
+// The value of a JSON number that is an integer within +-kMaxAxisInteger; false for any other value.
+bool bounded_integer(const json& v, long long& out) {
+    if (v.is_number_unsigned()) {
+        const std::uint64_t u = v.get<std::uint64_t>();
+        if (u > static_cast<std::uint64_t>(kMaxAxisInteger)) return false;
+        out = static_cast<long long>(u);
+        return true;
+    }
+    if (v.is_number_integer()) {
+        const std::int64_t i = v.get<std::int64_t>();
+        if (i > kMaxAxisInteger || i < -kMaxAxisInteger) return false;
+        out = i;
+        return true;
+    }
+    if (v.is_number_float()) {
+        const double d = v.get<double>();
+        if (!std::isfinite(d) || std::floor(d) != d || std::fabs(d) > static_cast<double>(kMaxAxisInteger)) return false;
+        out = static_cast<long long>(d);
+        return true;
+    }
+    return false;
+}
+
+std::uint64_t saturating_mul(std::uint64_t a, std::uint64_t b) {
+    if (a == 0 || b == 0) return 0;
+    return a > std::numeric_limits<std::uint64_t>::max() / b ? std::numeric_limits<std::uint64_t>::max() : a * b;
+}
+
+std::uint64_t saturating_add(std::uint64_t a, std::uint64_t b) {
+    return a > std::numeric_limits<std::uint64_t>::max() - b ? std::numeric_limits<std::uint64_t>::max() : a + b;
+}
+
+std::string count_text(std::uint64_t n) {
+    return n == std::numeric_limits<std::uint64_t>::max() ? "more than 18446744073709551615" : std::to_string(n);
+}
+
 std::string resolve_scene(const std::string& entry, const std::string& file, const std::string& key) {
     std::vector<fs::path> candidates;
     const bool looks_like_path = entry.find('/') != std::string::npos || fs::path(entry).extension() == ".json";
@@ -91,9 +134,15 @@ std::string canonical_value(const json& v) {
 // Type check of one axis value against the parameter's declared type (ranges are the run's business).
 void check_axis_type(const ParamSpec& spec, const json& v, const std::string& file, const std::string& key) {
     bool ok = false;
+    long long integer = 0;
     switch (spec.type) {
-    case ParamType::Int: ok = v.is_number() && std::floor(v.get<double>()) == v.get<double>(); break;
-    case ParamType::Float: ok = v.is_number(); break;
+    case ParamType::Int:
+        ok = v.is_number() && std::floor(v.get<double>()) == v.get<double>();
+        if (ok && !bounded_integer(v, integer))
+            throw InputError(file, key, "value " + v.dump() + " is out of bounds: integers must be within " +
+                                            kIntegerBound + "; valid: " + spec.valid_text());
+        break;
+    case ParamType::Float: ok = v.is_number() && std::isfinite(v.get<double>()); break;
     case ParamType::Bool: ok = v.is_boolean(); break;
     case ParamType::Enum: ok = v.is_string(); break;
     }
@@ -108,49 +157,116 @@ std::string safe_token(const std::string& s) {
     return out;
 }
 
+// Frames of a scene (or the default ones): a list, range or pow2 of integers, each once.
 std::vector<int> parse_frames(const json& value, const std::string& file, const std::string& key) {
     std::vector<int> frames;
-    for (const json& f : expand_axis_values(value, file, key))
-        frames.push_back(static_cast<int>(require_integer(f, file, key, 0, 1000000)));
+    std::set<int> seen;
+    for (const json& f : expand_axis_values(value, file, key)) {
+        const int frame = static_cast<int>(require_integer(f, file, key, 0, 1000000));
+        if (!seen.insert(frame).second)
+            throw InputError(file, key, "frame " + std::to_string(frame) + " is given twice; give each frame once");
+        frames.push_back(frame);
+    }
     return frames;
+}
+
+// The identity of a scene file: its canonical path (links resolved), so one file is recognised however
+// it is named.
+std::string file_identity(const std::string& path) {
+    std::error_code ec;
+    const fs::path canonical = fs::canonical(path, ec);
+    return ec ? fs::absolute(path).lexically_normal().string() : canonical.string();
+}
+
+// One axis description, checked and measured without expanding it.
+struct AxisGenerator {
+    enum class Kind { List, IntegerRange, FloatRange, Pow2 } kind = Kind::List;
+    std::uint64_t count = 0;
+    long long first = 0, step = 0;   // IntegerRange; Pow2: first = lo
+    double start = 0.0, fstep = 0.0; // FloatRange
+};
+
+AxisGenerator read_generator(const json& value, const std::string& file, const std::string& key) {
+    AxisGenerator g;
+    if (value.is_array()) {
+        for (const auto& v : value)
+            if (!v.is_primitive() || v.is_null())
+                throw InputError(file, key, "axis values must be numbers, strings or booleans");
+        g.kind = AxisGenerator::Kind::List;
+        g.count = value.size();
+    } else if (value.is_object() && value.size() == 1 && value.contains("range")) {
+        const json& r = value["range"];
+        const std::string rkey = key + ".range";
+        if (!r.is_array() || r.size() != 3 || !r[0].is_number() || !r[1].is_number() || !r[2].is_number())
+            throw InputError(file, rkey, "must be [start, stop, step] numbers");
+        if (r[0].is_number_integer() && r[1].is_number_integer() && r[2].is_number_integer()) {
+            long long start = 0, stop = 0, step = 0;
+            if (!bounded_integer(r[0], start) || !bounded_integer(r[1], stop) || !bounded_integer(r[2], step))
+                throw InputError(file, rkey, "start, stop and step must be integers within " + kIntegerBound);
+            if (step == 0 || (stop != start && (stop - start > 0) != (step > 0)))
+                throw InputError(file, rkey, "step must be non-zero and lead from start to stop");
+            g.kind = AxisGenerator::Kind::IntegerRange;
+            g.first = start;
+            g.step = step;
+            g.count = static_cast<std::uint64_t>((stop - start) / step) + 1;   // |stop - start| <= 2^54: no overflow
+        } else {
+            const double start = r[0].get<double>(), stop = r[1].get<double>(), step = r[2].get<double>();
+            if (!std::isfinite(start) || !std::isfinite(stop) || !std::isfinite(step) || !std::isfinite(stop - start))
+                throw InputError(file, rkey, "start, stop and step must be finite numbers");
+            const double steps = step == 0.0 ? -1.0 : (stop - start) / step;
+            if (!(steps >= 0.0))
+                throw InputError(file, rkey, "step must be non-zero and lead from start to stop");
+            g.kind = AxisGenerator::Kind::FloatRange;
+            g.start = start;
+            g.fstep = step;
+            const double count = std::floor(steps + 1e-9) + 1.0;
+            g.count = count >= 1.8e19 ? std::numeric_limits<std::uint64_t>::max() : static_cast<std::uint64_t>(count);
+        }
+    } else if (value.is_object() && value.size() == 1 && value.contains("pow2")) {
+        const json& r = value["pow2"];
+        const std::string pkey = key + ".pow2";
+        const std::string form = "must be [lo, hi] with lo <= hi both powers of two (e.g. [32, 512])";
+        if (!r.is_array() || r.size() != 2 || !r[0].is_number_integer() || !r[1].is_number_integer())
+            throw InputError(file, pkey, form);
+        long long bound[2] = {0, 0};
+        for (int i = 0; i < 2; ++i)
+            if (!bounded_integer(r[i], bound[i]))
+                throw InputError(file, pkey, std::string(i ? "hi " : "lo ") + r[i].dump() + " is out of bounds: " + form +
+                                                 ", within " + kIntegerBound);
+        const auto is_pow2 = [](long long v) { return v > 0 && (v & (v - 1)) == 0; };
+        if (!is_pow2(bound[0]) || !is_pow2(bound[1]) || bound[0] > bound[1]) throw InputError(file, pkey, form);
+        g.kind = AxisGenerator::Kind::Pow2;
+        g.first = bound[0];
+        g.count = static_cast<std::uint64_t>(std::countr_zero(static_cast<std::uint64_t>(bound[1])) -
+                                             std::countr_zero(static_cast<std::uint64_t>(bound[0]))) + 1;
+    } else {
+        throw InputError(file, key, "an axis is a list of values, {\"range\": [start, stop, step]} or {\"pow2\": [lo, hi]}");
+    }
+    if (g.count == 0) throw InputError(file, key, "empty axis: give at least one value");
+    if (g.count > kMaxAxisValues)
+        throw InputError(file, key, "the axis has " + count_text(g.count) + " values, more than " +
+                                        std::to_string(kMaxAxisValues) + " (the most one axis may have)");
+    return g;
 }
 
 }  // namespace
 
+std::uint64_t axis_value_count(const json& value, const std::string& file, const std::string& key) {
+    return read_generator(value, file, key).count;
+}
+
 std::vector<json> expand_axis_values(const json& value, const std::string& file, const std::string& key) {
+    const AxisGenerator g = read_generator(value, file, key);
     std::vector<json> out;
-    if (value.is_array()) {
-        for (const auto& v : value) {
-            if (!v.is_primitive() || v.is_null())
-                throw InputError(file, key, "axis values must be numbers, strings or booleans");
-            out.push_back(v);
+    out.reserve(g.count);
+    for (std::uint64_t i = 0; i < g.count; ++i) {
+        switch (g.kind) {
+        case AxisGenerator::Kind::List: out.push_back(value[i]); break;
+        case AxisGenerator::Kind::IntegerRange: out.push_back(g.first + static_cast<long long>(i) * g.step); break;
+        case AxisGenerator::Kind::FloatRange: out.push_back(g.start + static_cast<double>(i) * g.fstep); break;
+        case AxisGenerator::Kind::Pow2: out.push_back(g.first << i); break;
         }
-    } else if (value.is_object() && value.size() == 1 && value.contains("range")) {
-        const json& r = value["range"];
-        if (!r.is_array() || r.size() != 3 || !r[0].is_number() || !r[1].is_number() || !r[2].is_number())
-            throw InputError(file, key + ".range", "must be [start, stop, step] numbers");
-        const double start = r[0].get<double>(), stop = r[1].get<double>(), step = r[2].get<double>();
-        if (step == 0.0 || (stop - start) * step < 0.0 || !std::isfinite(start + stop + step))
-            throw InputError(file, key + ".range", "step must be non-zero and lead from start to stop");
-        const bool integral = r[0].is_number_integer() && r[1].is_number_integer() && r[2].is_number_integer();
-        const long long count = static_cast<long long>(std::floor((stop - start) / step + 1e-9)) + 1;
-        if (count > 100000) throw InputError(file, key + ".range", "more than 100000 values");
-        for (long long i = 0; i < count; ++i) {
-            if (integral) out.push_back(r[0].get<long long>() + i * r[2].get<long long>());
-            else out.push_back(start + static_cast<double>(i) * step);
-        }
-    } else if (value.is_object() && value.size() == 1 && value.contains("pow2")) {
-        const json& r = value["pow2"];
-        auto is_pow2 = [](const json& v) {
-            return v.is_number_integer() && v.get<long long>() > 0 && (v.get<long long>() & (v.get<long long>() - 1)) == 0;
-        };
-        if (!r.is_array() || r.size() != 2 || !is_pow2(r[0]) || !is_pow2(r[1]) || r[0].get<long long>() > r[1].get<long long>())
-            throw InputError(file, key + ".pow2", "must be [lo, hi] with lo <= hi both powers of two (e.g. [32, 512])");
-        for (long long v = r[0].get<long long>(); v <= r[1].get<long long>(); v *= 2) out.push_back(v);
-    } else {
-        throw InputError(file, key, "an axis is a list of values, {\"range\": [start, stop, step]} or {\"pow2\": [lo, hi]}");
     }
-    if (out.empty()) throw InputError(file, key, "empty axis: give at least one value");
     return out;
 }
 
@@ -174,11 +290,14 @@ SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string
     };
 
     // Command-line axes replace or add axes before validation, so they are checked like the file.
+    std::set<std::string> overridden;
     for (const auto& text : axis_overrides) {
         const auto eq = text.find('='), dot = text.find('.');
         if (eq == std::string::npos || dot == std::string::npos || dot > eq)
             throw InputError("--axis", text, "expected METHOD.AXIS=VALUES, e.g. caustic_mapping.iterations=[1,2,4]");
         const std::string method = text.substr(0, dot), axis = text.substr(dot + 1, eq - dot - 1);
+        if (!overridden.insert(method + "." + axis).second)
+            throw InputError("--axis", text, method + "." + axis + " is given twice on the command line; give each axis once");
         json values;
         try {
             values = json::parse(text.substr(eq + 1));
@@ -203,6 +322,8 @@ SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string
     if (root.contains("frames")) default_frames = parse_frames(root["frames"], path, "frames");
     if (!root.contains("scenes") || !root["scenes"].is_array() || root["scenes"].empty())
         throw InputError(path, "scenes", "must be a non-empty list of scene names or paths");
+    std::map<std::string, std::size_t> scene_files;   // identity -> index of its entry
+    std::map<std::string, std::size_t> scene_names;   // run-id token of the name -> index
     for (std::size_t i = 0; i < root["scenes"].size(); ++i) {
         const std::string key = "scenes[" + std::to_string(i) + "]";
         const json& entry = root["scenes"][i];
@@ -220,6 +341,23 @@ SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string
         } else {
             throw InputError(path, key, "must be a scene name or path, or {\"scene\": NAME, \"frames\": [...]}");
         }
+        const auto entry_text = [&](std::size_t j) {
+            const json& e = root["scenes"][j];
+            return e.is_string() ? e.get<std::string>() : e["scene"].get<std::string>();
+        };
+        const auto same_file = scene_files.find(file_identity(scene.path));
+        if (same_file != scene_files.end())
+            throw InputError(path, key, "'" + entry_text(i) + "' is the same scene file as scenes[" +
+                                            std::to_string(same_file->second) + "] ('" + entry_text(same_file->second) +
+                                            "'); give each scene once, with all its frames in one entry");
+        const std::string name = fs::path(scene.path).stem().string();
+        const auto same_name = scene_names.find(safe_token(name));
+        if (same_name != scene_names.end())
+            throw InputError(path, key, "scene name '" + name + "' (" + scene.path + ") is also the name of scenes[" +
+                                            std::to_string(same_name->second) + "] (" + spec.scenes[same_name->second].path +
+                                            "); run ids and reference folders are named after the scene: rename one file");
+        scene_files.emplace(file_identity(scene.path), i);
+        scene_names.emplace(safe_token(name), i);
         spec.scenes.push_back(std::move(scene));
     }
     if (root.contains("reference")) {
@@ -254,24 +392,52 @@ SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string
     }
     if (!root.contains("methods") || !root["methods"].is_object() || root["methods"].empty())
         throw InputError(path, "methods", "must be a non-empty object {method: {axis: values}}");
+    // First the size, by arithmetic on the axes: a sweep too large to plan is refused before any axis
+    // is expanded.
+    const auto find_param = [&](const MethodInfo& info, const std::string& name, const std::string& axis) {
+        for (const auto& p : info.params)
+            if (p.name == axis) return &p;
+        std::string known;
+        for (const auto& p : info.params) known += (known.empty() ? "" : ", ") + p.name;
+        throw InputError(path, "methods." + name + "." + axis, "unknown axis; parameters of " + name + ": " + known);
+    };
+    std::uint64_t scene_frames = 0, runs_per_frame = 0;
+    for (const auto& scene : spec.scenes) scene_frames = saturating_add(scene_frames, scene.frames.size());
     for (const auto& [name, axes] : root["methods"].items()) {
         const MethodInfo& info = require_method(name, path + ": methods." + name);
         if (!axes.is_object()) throw InputError(path, "methods." + name, "must be an object {axis: values}");
+        std::uint64_t product = 1;
+        for (const auto& [axis, values] : axes.items()) {
+            (void)find_param(info, name, axis);
+            product = saturating_mul(product, axis_value_count(values, path, "methods." + name + "." + axis));
+        }
+        runs_per_frame = saturating_add(runs_per_frame, product);
+    }
+    const std::uint64_t total = saturating_mul(scene_frames, runs_per_frame);
+    if (total > kMaxSweepRuns)
+        throw InputError(path, "methods",
+                         "the sweep has " + count_text(total) + " runs (" + std::to_string(scene_frames) +
+                             " scene frames x " + count_text(runs_per_frame) + " method runs each), more than " +
+                             std::to_string(kMaxSweepRuns) + ", the most one sweep may have even with --yes; "
+                             "split it into several sweeps or give fewer axis values");
+    for (const auto& [name, axes] : root["methods"].items()) {
+        const MethodInfo& info = require_method(name, path + ": methods." + name);
         SweepMethod m{name, {}};
         for (const auto& [axis, values] : axes.items()) {
             const std::string key = "methods." + name + "." + axis;
-            const ParamSpec* param = nullptr;
-            for (const auto& p : info.params)
-                if (p.name == axis) param = &p;
-            if (!param) {
-                std::string known;
-                for (const auto& p : info.params) known += (known.empty() ? "" : ", ") + p.name;
-                throw InputError(path, key, "unknown axis; parameters of " + name + ": " + known);
-            }
+            const ParamSpec* param = find_param(info, name, axis);
             SweepAxis a{axis, {}};
+            std::map<std::string, std::string> seen;   // canonical value -> the value as first given
             for (const json& v : expand_axis_values(values, path, key)) {
                 check_axis_type(*param, v, path, key);
-                a.values.push_back(canonical_value(v));
+                std::string value = canonical_value(v);
+                const auto [it, inserted] = seen.emplace(value, v.dump());
+                if (!inserted)
+                    throw InputError(path, key, "value " + value + " is given twice" +
+                                                    (it->second == v.dump() ? std::string()
+                                                                            : " (as " + it->second + " and " + v.dump() + ")") +
+                                                    "; give each value once");
+                a.values.push_back(std::move(value));
             }
             m.axes.push_back(std::move(a));
         }
@@ -280,8 +446,25 @@ SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string
     return spec;
 }
 
+std::uint64_t count_runs(const SweepSpec& spec) {
+    std::uint64_t scene_frames = 0, runs_per_frame = 0;
+    for (const auto& scene : spec.scenes) scene_frames = saturating_add(scene_frames, scene.frames.size());
+    for (const auto& m : spec.methods) {
+        std::uint64_t product = 1;
+        for (const auto& a : m.axes) product = saturating_mul(product, a.values.size());
+        runs_per_frame = saturating_add(runs_per_frame, product);
+    }
+    return saturating_mul(scene_frames, runs_per_frame);
+}
+
 std::vector<PlannedRun> plan_runs(const SweepSpec& spec) {
+    const std::uint64_t total = count_runs(spec);
+    if (total > kMaxSweepRuns)
+        throw InputError(spec.path, "methods", "the sweep has " + count_text(total) + " runs, more than " +
+                                                   std::to_string(kMaxSweepRuns) + ", the most one sweep may have");
     std::vector<PlannedRun> runs;
+    runs.reserve(static_cast<std::size_t>(total));
+    std::unordered_set<std::string> ids;
     for (const auto& scene : spec.scenes) {
         const std::string& scene_path = scene.path;
         const std::string scene_name = fs::path(scene_path).stem().string();
@@ -300,8 +483,14 @@ std::vector<PlannedRun> plan_runs(const SweepSpec& spec) {
                     run.id = safe_token(scene_name) + "-f" + std::to_string(frame) + "-" + safe_token(m.method);
                     for (std::size_t a = 0; a < m.axes.size(); ++a) {
                         run.params[m.axes[a].name] = m.axes[a].values[index[a]];
-                        run.id += "-" + safe_token(m.axes[a].name) + "=" + safe_token(m.axes[a].values[index[a]]);
+                        run.id.append("-").append(safe_token(m.axes[a].name)).append("=");
+                        run.id.append(safe_token(m.axes[a].values[index[a]]));
                     }
+                    if (!ids.insert(run.id).second)
+                        throw InputError(spec.path, "methods." + m.method,
+                                         "two runs would share the run id " + run.id +
+                                             " (values that differ only in characters a file name cannot hold); "
+                                             "give values that differ in letters, digits, '.' or '-'");
                     runs.push_back(std::move(run));
                     std::size_t a = m.axes.size();
                     while (a > 0 && ++index[a - 1] == m.axes[a - 1].values.size()) index[--a] = 0;

@@ -26,6 +26,14 @@
 // {"pow2": [lo, hi]} (every power of two from lo to hi, both powers of two). Axes are checked against the
 // method's parameter table when the spec is read (unknown axis, wrong type, empty axis: InputError);
 // values outside a parameter's range are not an error of the spec: that run is recorded as skipped.
+//
+// What would mix or duplicate runs is refused (InputError naming it): a value given twice in one axis
+// (compared by canonical value after expansion: 64 and 64.0, or two range steps that print the same), a
+// frame given twice for one scene, a scene given twice (the same file by name, by path or through a
+// link), two scene files with one name (run ids and reference folders are named after the scene), an
+// --axis given twice. Sizes are bounded before anything is expanded, by arithmetic on the generators:
+// at most kMaxAxisValues values per axis (frames included), integers within +-kMaxAxisInteger, and at
+// most kMaxSweepRuns runs in all (even with --yes; sweep.hpp asks for --yes above 500).
 #include <cstdint>
 #include <map>
 #include <string>
@@ -34,6 +42,11 @@
 #include <nlohmann/json.hpp>
 
 namespace caustics {
+
+constexpr std::uint64_t kMaxAxisValues = 100'000;      // values of one axis or one scene's frames
+constexpr std::uint64_t kMaxSweepRuns = 100'000;       // runs of one sweep, even with --yes
+constexpr long long kMaxAxisInteger = 1LL << 53;       // 9007199254740992: the largest integer a double
+                                                       // (results.csv, the report, range checks) holds exactly
 
 struct SweepAxis {
     std::string name;
@@ -85,14 +98,24 @@ struct PlannedRun {
 };
 
 // Reads a spec and applies `axis_overrides` ("method.axis=<json value>", from --axis). Throws InputError
-// naming the file and key for every malformed input.
+// naming the file and key for every malformed input, every duplicate, and a sweep of more than
+// kMaxSweepRuns runs (counted before any axis is expanded).
 SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string>& axis_overrides = {});
 
+// The number of runs plan_runs would return, without planning them (saturates at UINT64_MAX).
+std::uint64_t count_runs(const SweepSpec& spec);
+
 // The runs in a fixed order: scene, frame, method (by name), then the Cartesian product of the axes
-// (sorted by name; the last one varies fastest).
+// (sorted by name; the last one varies fastest). Throws InputError if two runs would share an id or the
+// spec has more than kMaxSweepRuns runs.
 std::vector<PlannedRun> plan_runs(const SweepSpec& spec);
 
-// Expands one axis value description (list, range or pow2). `key` names it in messages.
+// The number of values an axis description (list, range or pow2) gives, computed without expanding it;
+// throws InputError for a malformed one or one whose numbers are out of bounds. `key` names it.
+std::uint64_t axis_value_count(const nlohmann::json& value, const std::string& file, const std::string& key);
+
+// Expands one axis value description (list, range or pow2); throws InputError (as axis_value_count) and
+// for more than kMaxAxisValues values. `key` names it in messages.
 std::vector<nlohmann::json> expand_axis_values(const nlohmann::json& value, const std::string& file,
                                                const std::string& key);
 

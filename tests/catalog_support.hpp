@@ -89,11 +89,14 @@ inline void check_refused(const CaseDir& dir, const std::vector<std::string>& ar
     for (const auto& e : expect) EXPECT_NE(r.err.find(e), std::string::npos) << "message does not name '" << e << "': " << r.err;
     EXPECT_LT(seconds, limits.seconds) << "took " << seconds << " s";
     std::error_code ec;
-    if (std::filesystem::exists(dir.out(), ec))
+    if (std::filesystem::exists(dir.out(), ec)) {
         EXPECT_TRUE(std::filesystem::is_empty(dir.out(), ec)) << "files written under --out";
-    if (std::filesystem::exists(dir.cache(), ec))
-        for (const auto& entry : std::filesystem::recursive_directory_iterator(dir.cache(), ec))
+    }
+    if (std::filesystem::exists(dir.cache(), ec)) {
+        for (const auto& entry : std::filesystem::recursive_directory_iterator(dir.cache(), ec)) {
             EXPECT_NE(entry.path().extension(), ".ref") << "cache entry written: " << entry.path();
+        }
+    }
 }
 
 }  // namespace caustics::test_support

@@ -35,7 +35,7 @@ protected:
         fs::create_directories(dir_);
     }
     void TearDown() override {
-        if (!HasFailure()) fs::remove_all(dir_);
+        fs::remove_all(dir_);   // also on failure: the assertion messages say what went wrong
     }
 
     Result run(const std::vector<std::string>& args) { return run_program(CAUSTICS_BINARY, args, dir_); }
@@ -245,6 +245,24 @@ TEST_F(CliTest, RenderWritesFilesAndKeys) {
     // No temporary files are left behind by the atomic writes.
     for (const auto& entry : fs::directory_iterator(out_dir()))
         EXPECT_EQ(entry.path().string().find(".tmp."), std::string::npos) << entry.path();
+}
+
+// The checked options (harness/cli/options.hpp) pass valid values on unchanged, in every spelling they
+// accept: an exponent (2e4), a choice in any case, the largest seed, the bounds of a range.
+TEST_F(CliTest, CheckedOptionsAcceptValidSpellings) {
+    const std::string scene = write_scene("spellings.json", base_scene());
+    const Result r = run({"render", scene, "--method", "caustic_triangles", "--set", "grid=16", "--photons", "2e4",
+                          "--sampler", "Independent", "--replicas", "4", "--truth", "reference", "--seed",
+                          "4611686018427387904", "--threads", "1", "--noise-target", "0", "--warmup", "0", "--repeats",
+                          "1", "--max-time", "0.5", "--timing-precision", "1", "--frame", "0", "--out", out_dir(),
+                          "--cache", cache_dir()});
+    ASSERT_EQ(r.code, 0) << r.err;
+    const json m = json::parse(slurp(fs::path(out_dir()) / "metrics.json"));
+    EXPECT_EQ(m["reference"]["photons"].get<long long>(), 20000);
+    EXPECT_EQ(m["reference"]["sampler"], "independent");
+    EXPECT_EQ(m["reference"]["replicas"], 4);
+    EXPECT_EQ(m["truth"]["kind"], "reference");
+    EXPECT_EQ(m["threads"], 1);
 }
 
 TEST_F(CliTest, NoReferenceLeavesErrorNull) {

@@ -12,6 +12,7 @@
 #include "reference.hpp"
 #include "reference_support.hpp"
 #include "scene.hpp"
+#include "test_support.hpp"
 #include "water_scene.hpp"
 
 namespace fs = std::filesystem;
@@ -19,7 +20,8 @@ using namespace caustics;
 using namespace caustics::test_support;
 
 TEST(ReferenceCache, KeyChangesWithEveryInput) {
-    const fs::path dir = fs::temp_directory_path() / ("caustics_refkey_" + std::to_string(::getpid()));
+    const ScopedTempDir temp("caustics_refkey");
+    const fs::path& dir = temp.path();
     fs::create_directories(dir);
     const fs::path asset = dir / "asset.bin";
     std::ofstream(asset, std::ios::binary) << "abcdef";
@@ -56,12 +58,11 @@ TEST(ReferenceCache, KeyChangesWithEveryInput) {
     EXPECT_NE(base, reference_cache_key(s, 0, settings));
     std::ofstream(asset, std::ios::binary) << "abcdef";
     EXPECT_EQ(base, reference_cache_key(s, 0, settings));
-    fs::remove_all(dir);
 }
 
 TEST(ReferenceCache, DamagedEntriesAreRebuilt) {
-    const fs::path dir = fs::temp_directory_path() / ("caustics_refcache_" + std::to_string(::getpid()));
-    fs::remove_all(dir);
+    const ScopedTempDir temp("caustics_refcache");
+    const fs::path& dir = temp.path();
     TracedScene setup(sine_test_scene(16, 16));
     ReferenceSettings settings;
     settings.photons = 100'000;
@@ -106,14 +107,13 @@ TEST(ReferenceCache, DamagedEntriesAreRebuilt) {
     EXPECT_FALSE(load().from_cache);
     for (const auto& entry : fs::directory_iterator(dir))   // no temporary files left behind
         EXPECT_EQ(entry.path().extension(), ".ref") << entry.path();
-    fs::remove_all(dir);
 }
 
 TEST(ReferenceCache, SceneBuiltInCodeIsNeverCached) {
     // Two different scenes built in code have the same (empty) file bytes, so a key could not tell
     // them apart: both are computed, and nothing is written.
-    const fs::path dir = fs::temp_directory_path() / ("caustics_refcode_" + std::to_string(::getpid()));
-    fs::remove_all(dir);
+    const ScopedTempDir temp("caustics_refcode");
+    const fs::path& dir = temp.path();
     WaterOverFloor d;
     d.generator = HeightGenerator::Sine;
     d.amplitude = 0.01;
@@ -135,5 +135,4 @@ TEST(ReferenceCache, SceneBuiltInCodeIsNeverCached) {
     EXPECT_NE(a.receiver.pixels, b.receiver.pixels);
     EXPECT_FALSE(load(sine).from_cache);
     EXPECT_TRUE(!fs::exists(dir) || fs::is_empty(dir));
-    fs::remove_all(dir);
 }

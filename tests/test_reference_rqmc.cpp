@@ -16,7 +16,7 @@
 #include "photon_sampler.hpp"
 #include "reference.hpp"
 #include "reference_support.hpp"
-#include "run_context.hpp"
+#include "test_support.hpp"
 
 namespace fs = std::filesystem;
 using namespace caustics;
@@ -75,15 +75,6 @@ std::pair<double, double> seed_spread_ratio(const TracedScene& setup, SamplerKin
     }
     return {num / den, terms};
 }
-
-struct TempDir {
-    fs::path path;
-    explicit TempDir(const std::string& name)
-        : path(fs::temp_directory_path() / (name + "_" + std::to_string(::getpid()))) {
-        fs::remove_all(path);
-    }
-    ~TempDir() { fs::remove_all(path); }
-};
 
 }  // namespace
 
@@ -191,7 +182,7 @@ TEST(ReferenceNoiseTarget, StopsAtTheFirstRoundThatMeetsIt) {
 }
 
 TEST(ReferenceNoiseTarget, CacheServesLooserTargetsAndExtendsForStricterOnes) {
-    TempDir dir("caustics_noise_target");
+    const ScopedTempDir dir("caustics_noise_target");
     Scene scene = load_scene(scene_path("sine.json"));
     scene.receiver.width = scene.receiver.height = 32;
     TracedScene setup(std::move(scene));
@@ -201,7 +192,7 @@ TEST(ReferenceNoiseTarget, CacheServesLooserTargetsAndExtendsForStricterOnes) {
     settings.photons = 50'000;
     settings.noise_target = 0.06;
     auto load = [&](const ReferenceSettings& s) {
-        return load_or_compute_reference(*setup.frame, *setup.tracer, *setup.chart, nullptr, s, dir.path.string());
+        return load_or_compute_reference(*setup.frame, *setup.tracer, *setup.chart, nullptr, s, dir.path().string());
     };
     const ReferenceResult first = load(settings);
     EXPECT_FALSE(first.from_cache);
@@ -224,7 +215,7 @@ TEST(ReferenceNoiseTarget, CacheServesLooserTargetsAndExtendsForStricterOnes) {
     EXPECT_EQ(extended.photons_traced, extended.photons - first.photons);
     // One entry per key is kept: the extended one holds every photon of the smaller.
     int entries = 0;
-    for (const auto& e : fs::directory_iterator(dir.path)) entries += e.path().extension() == ".ref";
+    for (const auto& e : fs::directory_iterator(dir.path())) entries += e.path().extension() == ".ref";
     EXPECT_EQ(entries, 1);
     // An explicit photon count is served exactly by that entry.
     ReferenceSettings exact = settings;

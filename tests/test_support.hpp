@@ -1,6 +1,7 @@
 #pragma once
 // Small helpers shared by the tests that drive the `caustics` program through a shell.
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -10,6 +11,26 @@
 #include <vector>
 
 namespace caustics::test_support {
+
+// A temporary folder (name + process id) removed when it goes out of scope, also when the test fails
+// or returns early on a failed ASSERT.
+class ScopedTempDir {
+public:
+    explicit ScopedTempDir(const std::string& name)
+        : path_(std::filesystem::temp_directory_path() / (name + "_" + std::to_string(::getpid()))) {
+        std::filesystem::remove_all(path_);
+    }
+    ~ScopedTempDir() {
+        std::error_code ec;
+        std::filesystem::remove_all(path_, ec);
+    }
+    ScopedTempDir(const ScopedTempDir&) = delete;
+    ScopedTempDir& operator=(const ScopedTempDir&) = delete;
+    const std::filesystem::path& path() const { return path_; }
+
+private:
+    std::filesystem::path path_;
+};
 
 // The whole file as bytes ("" if it cannot be read).
 inline std::string slurp(const std::filesystem::path& p) {

@@ -24,12 +24,27 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path temp_dir(const std::string& name) {
-    fs::path d = fs::temp_directory_path() / ("caustics_test_sweep_" + name + "_" + std::to_string(getpid()));
-    fs::remove_all(d);
-    fs::create_directories(d);
-    return d;
-}
+// A folder of the test's own, removed when the test ends (also when it fails).
+class TempDir {
+public:
+    explicit TempDir(const std::string& name)
+        : path_(fs::temp_directory_path() / ("caustics_test_sweep_" + name + "_" + std::to_string(getpid()))) {
+        fs::remove_all(path_);
+        fs::create_directories(path_);
+    }
+    ~TempDir() {
+        std::error_code ec;
+        fs::remove_all(path_, ec);
+    }
+    TempDir(const TempDir&) = delete;
+    TempDir& operator=(const TempDir&) = delete;
+    fs::path operator/(const std::string& name) const { return path_ / name; }
+
+private:
+    fs::path path_;
+};
+
+
 
 fs::path write_file(const fs::path& path, const std::string& text) {
     std::ofstream(path) << text;
@@ -64,7 +79,7 @@ const char* kValidSpec = R"({
 }  // namespace
 
 TEST(SweepSpec, ValidSpecExpandsToCartesianProduct) {
-    const fs::path d = temp_dir("valid");
+    const TempDir d("valid");
     const SweepSpec spec = load_sweep_spec(write_file(d / "s.json", kValidSpec).string(),
                                            {"caustic_triangles.absorption=[true,false]"});
     ASSERT_EQ(spec.methods.size(), 1u);
@@ -83,7 +98,7 @@ TEST(SweepSpec, ValidSpecExpandsToCartesianProduct) {
 }
 
 TEST(SweepSpec, PerSceneFramesOverrideTheDefault) {
-    const fs::path d = temp_dir("frames");
+    const TempDir d("frames");
     const SweepSpec spec = load_sweep_spec(write_file(d / "s.json", R"({
       "scenes": ["sine", {"scene": "gaussian", "frames": {"range": [0, 4, 2]}}], "frames": [0],
       "methods": {"caustic_triangles": {}}})").string());
@@ -109,9 +124,104 @@ TEST(SweepSpec, RangeAndPow2) {
     EXPECT_EQ(p[3].get<int>(), 256);
 }
 
+// Axes are measured by arithmetic before they are expanded: a generator that would overflow or give too
+// many values is refused at once, however large its bounds.
+TEST(SweepSpec, AxesAreCountedBeforeExpanding) {
+    using nlohmann::json;
+    EXPECT_EQ(axis_value_count(json::parse(R"({"pow2": [1, 9007199254740992]})"), "f", "k"), 54u);
+    EXPECT_EQ(axis_value_count(json::parse(R"({"range": [10, 1, -3]})"), "f", "k"), 4u);
+    EXPECT_EQ(axis_value_count(json::parse(R"({"range": [0.0, 1.0, 0.25]})"), "f", "k"), 5u);
+    const auto p = expand_axis_values(json::parse(R"({"pow2": [1, 9007199254740992]})"), "f", "k");
+    ASSERT_EQ(p.size(), 54u);
+    EXPECT_EQ(p.back().get<long long>(), 9007199254740992LL);
+    const auto r = expand_axis_values(json::parse(R"({"range": [10, 1, -3]})"), "f", "k");
+    ASSERT_EQ(r.size(), 4u);
+    EXPECT_EQ(r.back().get<long long>(), 1);
+    const auto start = std::chrono::steady_clock::now();
+    for (const char* bad : {R"({"pow2": [2, 4611686018427387904]})", R"({"pow2": [2, 18446744073709551615]})",
+                            R"({"range": [-9223372036854775807, 9223372036854775807, 922337203685477580]})",
+                            R"({"range": [0, 9007199254740992, 1]})", R"({"range": [0, 1, 1e-300]})",
+                            R"({"range": [-1e308, 1e308, 1e300]})", R"({"range": [0, 10, -1]})", R"({"range": [0, 1, 2.5e-6]})"}) {
+        try {
+            (void)expand_axis_values(json::parse(bad), "f.json", "methods.m.a");
+            ADD_FAILURE() << bad << ": accepted";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find("methods.m.a"), std::string::npos) << bad << ": " << e.what();
+        }
+    }
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 0.5);
+}
+
+// What would give two runs one id, or measure one run twice, is refused naming it.
+TEST(SweepSpec, DuplicatesAreRefused) {
+    const TempDir d("duplicates");
+    const std::string sine = std::string(CAUSTICS_SOURCE_DIR) + "/scenes/sine.json";
+    const std::vector<std::tuple<std::string, std::string, std::string>> cases = {
+        {"value", R"({"scenes": ["sine"], "methods": {"caustic_triangles": {"grid": [16, 32, 16]}}})", "value 16 is given twice"},
+        {"int_float", R"({"scenes": ["sine"], "methods": {"caustic_triangles": {"grid": [64, 64.0]}}})", "(as 64 and 64.0)"},
+        {"range", R"({"scenes": ["sine"], "methods": {"caustic_mapping": {"d0": {"range": [1, 1.000000000000001, 1e-16]}}}})",
+         "methods.caustic_mapping.d0"},
+        {"enum", R"({"scenes": ["sine"], "methods": {"caustic_mapping": {"estimator": ["newton", "approx", "newton"]}}})",
+         "value newton is given twice"},
+        {"scene", R"({"scenes": ["sine", ")" + sine + R"("], "methods": {"caustic_triangles": {}}})", "scenes[1]"},
+        {"frame", R"({"scenes": ["sine"], "frames": {"range": [0, 4, 2]}, "methods": {"caustic_triangles": {}}})", ""},
+        {"scene_frame", R"({"scenes": [{"scene": "sine", "frames": [3, 3]}], "methods": {"caustic_triangles": {}}})",
+         "scenes[0].frames"},
+    };
+    for (const auto& [name, text, key] : cases) {
+        const fs::path file = write_file(d / (name + ".json"), text);
+        if (key.empty()) {   // a control: no duplicate
+            EXPECT_NO_THROW(load_sweep_spec(file.string())) << name;
+            continue;
+        }
+        try {
+            load_sweep_spec(file.string());
+            ADD_FAILURE() << name << ": accepted";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << name << ": " << e.what();
+        }
+    }
+    const fs::path ok = write_file(d / "ok.json", kValidSpec);
+    EXPECT_THROW(load_sweep_spec(ok.string(), {"caustic_triangles.grid=[16]", "caustic_triangles.grid=[32]"}), InputError);
+    EXPECT_NO_THROW(load_sweep_spec(ok.string(), {"caustic_triangles.grid=[16]", "caustic_triangles.iterations=[1]"}));
+}
+
+// count_runs is what plan_runs returns, and more than kMaxSweepRuns runs are refused when the spec is read.
+TEST(SweepSpec, RunCountAndCeiling) {
+    const TempDir d("count");
+    const SweepSpec spec = load_sweep_spec(write_file(d / "s.json", R"({
+      "scenes": ["sine", {"scene": "gaussian", "frames": [0, 1, 2]}],
+      "methods": {"caustic_triangles": {"grid": [16, 32]}, "caustic_mapping": {"grid": [16], "estimator": ["approx", "newton"]}}})").string());
+    EXPECT_EQ(count_runs(spec), 4u * (2u + 2u));
+    EXPECT_EQ(plan_runs(spec).size(), count_runs(spec));
+    const fs::path big = write_file(d / "big.json", R"({"scenes": ["sine"],
+      "methods": {"caustic_mapping": {"grid": {"range": [1, 1000, 1]}, "map": {"range": [1, 101, 1]}}}})");
+    try {
+        load_sweep_spec(big.string());
+        ADD_FAILURE() << "101000 runs accepted";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("101000 runs"), std::string::npos) << e.what();
+    }
+    const fs::path edge = write_file(d / "edge.json", R"({"scenes": ["sine"],
+      "methods": {"caustic_mapping": {"grid": {"range": [1, 1000, 1]}, "map": {"range": [1, 100, 1]}}}})");
+    EXPECT_EQ(count_runs(load_sweep_spec(edge.string())), kMaxSweepRuns);
+}
+
+// The shipped specs stay valid under the duplicate and size checks (paper.json needs --yes, not more).
+TEST(SweepSpec, ShippedSpecsLoad) {
+    for (const char* name : {"quick", "paper"}) {
+        const std::string path = std::string(CAUSTICS_SOURCE_DIR) + "/scripts/sweeps/" + name + ".json";
+        SweepSpec spec;
+        ASSERT_NO_THROW(spec = load_sweep_spec(path)) << name;
+        EXPECT_GT(count_runs(spec), 0u) << name;
+        EXPECT_LE(count_runs(spec), kMaxSweepRuns) << name;
+        EXPECT_EQ(plan_runs(spec).size(), count_runs(spec)) << name;
+    }
+}
+
 // Each malformed spec: InputError whose message names the offending key.
 TEST(SweepSpec, MalformedCatalog) {
-    const fs::path d = temp_dir("malformed");
+    const TempDir d("malformed");
     const std::string m = R"("methods": {"caustic_triangles": {"grid": [32]}})";
     const std::vector<std::tuple<std::string, std::string, std::string>> cases = {
         {"unknown_method", R"({"scenes": ["sine"], "methods": {"no_such_method": {}}})", "no_such_method"},
@@ -146,7 +256,7 @@ TEST(SweepSpec, MalformedCatalog) {
 }
 
 TEST(SweepCli, MalformedSpecExitsTwoAndWritesNothing) {
-    const fs::path d = temp_dir("cli_bad");
+    const TempDir d("cli_bad");
     const fs::path spec = write_file(d / "bad.json", R"({"scenes": ["sine"], "methods": {"caustic_triangles": {"grid": ["x"]}}})");
     EXPECT_EQ(run_program("sweep " + shell_quote(spec.string()) + " --out " + shell_quote((d / "out").string()), d / "log"), 2);
     EXPECT_FALSE(fs::exists(d / "out"));
@@ -154,7 +264,7 @@ TEST(SweepCli, MalformedSpecExitsTwoAndWritesNothing) {
 }
 
 TEST(SweepCli, TooManyRunsNeedYes) {
-    const fs::path d = temp_dir("cli_many");
+    const TempDir d("cli_many");
     const fs::path spec = write_file(d / "big.json", R"({"scenes": ["sine"], "methods": {"caustic_triangles": {"grid": {"range": [2, 1000, 1]}}}})");
     EXPECT_EQ(run_program("sweep " + shell_quote(spec.string()) + " --out " + shell_quote((d / "out").string()), d / "log"), 2);
     EXPECT_NE(read_file(d / "log").find("--yes"), std::string::npos);
@@ -163,7 +273,7 @@ TEST(SweepCli, TooManyRunsNeedYes) {
 // A sweep killed with SIGKILL in the middle of a run resumes: every run exactly once, finished rows
 // byte-identical.
 TEST(SweepCli, ResumeAfterKillKeepsFinishedRowsAndRunsEachOnce) {
-    const fs::path d = temp_dir("resume");
+    const TempDir d("resume");
     const fs::path spec = write_file(d / "s.json", R"({
       "scenes": ["sine"], "reference": {"photons": 20000}, "timing": {"warmup": 0, "repeats": 2},
       "methods": {"caustic_triangles": {"grid": [16, 24, 32, 40, 48, 56]}}})");
@@ -209,7 +319,7 @@ TEST(SweepCli, ResumeAfterKillKeepsFinishedRowsAndRunsEachOnce) {
 // An out-of-range axis value is a skipped run (with the parameter's valid range), a run past its time
 // limit a failed one; the sweep still exits 0.
 TEST(SweepCli, SkippedAndFailedRunsAreRecorded) {
-    const fs::path d = temp_dir("skipfail");
+    const TempDir d("skipfail");
     const std::string common = R"("scenes": ["sine"], "reference": {"photons": 20000},)";
     const fs::path skip_spec = write_file(d / "skip.json", "{" + common + R"( "timing": {"warmup": 0, "repeats": 1},
       "methods": {"caustic_triangles": {"grid": [1, 16]}}})");

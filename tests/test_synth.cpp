@@ -43,7 +43,7 @@ protected:
         fs::create_directories(dir_);
     }
     void TearDown() override {
-        if (!HasFailure()) fs::remove_all(dir_);
+        fs::remove_all(dir_);   // also on failure: the assertion messages say what went wrong
     }
 
     // ocean_tile.json with edits applied to its JSON (e.g. no dispersion), written to the temp folder.

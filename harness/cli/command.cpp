@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "errors.hpp"
 #include "params.hpp"
 
 namespace caustics::cli {
@@ -27,29 +28,52 @@ std::vector<Command> registered_commands() {
 
 std::map<std::string, std::string> parse_assignments(const std::vector<std::string>& sets, const std::string& option) {
     std::map<std::string, std::string> out;
+    std::map<std::string, std::string> given;   // key -> its first assignment as written
     for (const std::string& text : sets) {
         auto [key, value] = parse_assignment(text, option);
+        if (auto it = given.find(key); it != given.end())
+            throw invalid_value(option, "'" + key + "' given twice (" + it->second + ", " + text + ")", "each KEY once");
+        given[key] = text;
         out[key] = value;
     }
     return out;
 }
 
+CLI::Option* add_photons_option(CLI::App& app, std::uint64_t& photons, const std::string& doc) {
+    return add_integer_option(app, "--photons", photons, kMinPhotons, kMaxPhotons, doc)->capture_default_str();
+}
+
+CLI::Option* add_seed_option(CLI::App& app, std::uint64_t& seed, const std::string& doc) {
+    return add_integer_option(app, "--seed", seed, 0, kMaxSeed, doc)->capture_default_str();
+}
+
+CLI::Option* add_frame_option(CLI::App& app, int& frame) {
+    return add_integer_option(app, "--frame", frame, 0, kMaxFrame, "Animation frame")->capture_default_str();
+}
+
+CLI::Option* add_threads_option(CLI::App& app, int& threads, const std::string& doc) {
+    return add_integer_option(app, "--threads", threads, 0, kMaxThreads, doc, "0: every core");
+}
+
+CLI::Option* add_cache_option(CLI::App& app, std::string& cache_dir) {
+    return add_output_folder_option(app, "--cache", cache_dir,
+                                    "Reference cache folder (default $CAUSTICS_CACHE_DIR or results/cache)");
+}
+
 void add_reference_sampling_options(CLI::App& app, SamplerKind& sampler, int& replicas, double& noise_target,
                                     std::uint64_t& photon_cap) {
-    const std::map<std::string, SamplerKind> samplers{{"sobol", SamplerKind::Sobol}, {"independent", SamplerKind::Independent}};
-    app.add_option("--sampler", sampler,
-                   "Reference emission samples: sobol (Owen-scrambled Sobol' in replicas) or independent")
-        ->transform(CLI::CheckedTransformer(samplers, CLI::ignore_case))
+    add_enum_option(app, "--sampler", sampler, {{"sobol", SamplerKind::Sobol}, {"independent", SamplerKind::Independent}},
+                    "Reference emission samples: sobol (Owen-scrambled Sobol' in replicas) or independent")
         ->default_str("sobol");
-    app.add_option("--replicas", replicas, "Independent replicas of the reference (standard error from their spread)")
-        ->check(CLI::Range(2, ReferenceSettings::kMaxReplicas))
+    add_integer_option(app, "--replicas", replicas, 2, ReferenceSettings::kMaxReplicas,
+                       "Independent replicas of the reference (standard error from their spread)")
         ->capture_default_str();
-    app.add_option("--noise-target", noise_target,
-                   "Add reference photons in rounds until its noise_nrmse is at most this (0: fixed --photons)")
-        ->check(CLI::Range(0.0, 10.0))
+    add_number_option(app, "--noise-target", noise_target, 0.0, 10.0,
+                      "Add reference photons in rounds until its noise_nrmse is at most this (0: fixed --photons)",
+                      "0: fixed --photons")
         ->capture_default_str();
-    app.add_option("--photon-cap", photon_cap, "Most photons a noise target may use (then reported as not met)")
-        ->check(CLI::Range(std::uint64_t{1000}, std::uint64_t{100'000'000'000}))
+    add_integer_option(app, "--photon-cap", photon_cap, kMinPhotons, kMaxPhotons,
+                       "Most photons a noise target may use (then reported as not met)")
         ->capture_default_str();
 }
 

@@ -2,6 +2,7 @@
 // Subcommands of the `caustics` program register themselves, like methods do: a new subcommand is a new
 // harness/cli/commands_<name>.cpp with CAUSTICS_REGISTER_COMMAND(make_<name>_command); main.cpp names
 // none of them.
+#include <cstdint>
 #include <functional>
 #include <map>
 #include <string>
@@ -9,6 +10,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "options.hpp"
 #include "photon_sampler.hpp"
 #include "reference.hpp"
 
@@ -30,12 +32,30 @@ struct CommandRegistrar {
     explicit CommandRegistrar(Command (*make)());
 };
 
+// Ranges of the options that several commands share. They follow the sweep spec's fields
+// (harness/sweep_spec.cpp: reference.photons, reference.seed, frames, timing.warmup, timing.repeats), so
+// that anything a command line asks for a sweep can ask for too.
+inline constexpr std::int64_t kMinPhotons = 1000;
+inline constexpr std::int64_t kMaxPhotons = 100'000'000'000;   // 1e11
+inline constexpr std::int64_t kMaxSeed = std::int64_t{1} << 62;
+inline constexpr std::int64_t kMaxFrame = 1'000'000;           // the scene's own frame count is checked on loading
+inline constexpr std::int64_t kMaxThreads = 4096;
+inline constexpr std::int64_t kMaxWarmup = 10'000;
+inline constexpr std::int64_t kMaxRepeats = 100'000;
+
+// --photons, --seed, --frame, --threads, --cache with the ranges above (options.hpp checks them).
+CLI::Option* add_photons_option(CLI::App& app, std::uint64_t& photons, const std::string& doc);
+CLI::Option* add_seed_option(CLI::App& app, std::uint64_t& seed, const std::string& doc);
+CLI::Option* add_frame_option(CLI::App& app, int& frame);
+CLI::Option* add_threads_option(CLI::App& app, int& threads, const std::string& doc);
+CLI::Option* add_cache_option(CLI::App& app, std::string& cache_dir);
+
 // The reference's sampling options shared by `reference` and `render`: --sampler, --replicas,
-// --noise-target, --photon-cap. Values are checked by CLI11 (exit 2 with the valid range).
+// --noise-target, --photon-cap, checked as the sweep spec's reference fields are.
 void add_reference_sampling_options(CLI::App& app, SamplerKind& sampler, int& replicas, double& noise_target,
                                     std::uint64_t& photon_cap);
 
-// --set KEY=VALUE assignments; throws InputError for one without '='. A repeated key keeps the last value.
+// --set KEY=VALUE assignments; throws InputError for one without '=' or a KEY given twice.
 std::map<std::string, std::string> parse_assignments(const std::vector<std::string>& sets, const std::string& option);
 
 }  // namespace caustics::cli

@@ -28,8 +28,13 @@ struct ReferenceArgs {
 };
 
 int run_reference(const ReferenceArgs& a) {
-    ThreadLimit limit(a.threads);
     const std::string path = resolve_scene_path(a.scene);
+    // The default output folder is checked like a given --out, before any work.
+    const std::string out = a.out.empty() ? (fs::path("results") / "reference" / fs::path(path).stem() /
+                                             ("frame" + std::to_string(a.frame))).string()
+                                          : a.out;
+    if (a.out.empty()) check_output_folder("--out", out);
+    ThreadLimit limit(a.threads);
     Scene scene = load_scene(path);
     const SceneFrame sf(std::move(scene), a.frame);
     RenderOptions options;
@@ -42,9 +47,6 @@ int run_reference(const ReferenceArgs& a) {
     options.noise_target = a.noise_target;
     options.photon_cap = a.photon_cap;
     const ReferenceResult ref = reference_for(sf, options);
-    const std::string out = a.out.empty() ? (fs::path("results") / "reference" / sf.scene().name /
-                                             ("frame" + std::to_string(a.frame))).string()
-                                          : a.out;
     write_reference_outputs(out, sf.scene(), a.frame, ref);
     std::cout << "reference " << sf.scene().name << " frame " << a.frame << ": " << ref.photons << " photons, "
               << (ref.from_cache ? "from cache" : std::to_string(ref.seconds) + " s") << ", noise_nrmse "
@@ -64,13 +66,13 @@ Command make_reference_command() {
     c.order = 20;
     c.setup = [](CLI::App& app) -> std::function<int()> {
         auto a = std::make_shared<ReferenceArgs>();
-        app.add_option("scene", a->scene, "Scene file, or a scene name in scenes/ (e.g. pool)")->required();
-        app.add_option("--photons", a->photons, "Photons to trace")->check(CLI::PositiveNumber)->capture_default_str();
-        app.add_option("--frame", a->frame, "Animation frame")->check(CLI::NonNegativeNumber)->capture_default_str();
-        app.add_option("--out", a->out, "Output folder (default results/reference/<scene>/frame<F>)");
-        app.add_option("--threads", a->threads, "Worker threads (0: all cores)")->check(CLI::NonNegativeNumber);
-        app.add_option("--seed", a->seed, "Photon RNG seed")->capture_default_str();
-        app.add_option("--cache", a->cache, "Reference cache folder (default $CAUSTICS_CACHE_DIR or results/cache)");
+        add_scene_argument(app, a->scene, "Scene file, or a scene name in scenes/ (e.g. pool)")->required();
+        add_photons_option(app, a->photons, "Photons to trace");
+        add_frame_option(app, a->frame);
+        add_output_folder_option(app, "--out", a->out, "Output folder (default results/reference/<scene>/frame<F>)");
+        add_threads_option(app, a->threads, "Worker threads (0: all cores)");
+        add_seed_option(app, a->seed, "Photon RNG seed");
+        add_cache_option(app, a->cache);
         add_reference_sampling_options(app, a->sampler, a->replicas, a->noise_target, a->photon_cap);
         return [a]() { return run_reference(*a); };
     };

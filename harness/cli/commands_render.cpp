@@ -29,9 +29,12 @@ std::string value_text(const nlohmann::json& v) {
 int run_render_command(RenderArgs a) {
     RenderOptions& o = a.options;
     o.overrides = parse_assignments(a.sets, "--set");
-    if (o.out_dir.empty())
+    if (o.out_dir.empty()) {
+        // The default output folder is checked like a given --out, before any work.
         o.out_dir = (fs::path("results") / "render" / fs::path(resolve_scene_path(o.scene_path)).stem() / o.method)
                         .string();
+        check_output_folder("--out", o.out_dir);
+    }
     const RenderRun run = run_render(o);
     const nlohmann::json& m = run.metrics;
     std::cout << m["method"].get<std::string>() << " on " << m["scene"].get<std::string>() << " frame "
@@ -63,32 +66,28 @@ Command make_render_command() {
     c.setup = [](CLI::App& app) -> std::function<int()> {
         auto a = std::make_shared<RenderArgs>();
         RenderOptions& o = a->options;
-        app.add_option("scene", o.scene_path, "Scene file, or a scene name in scenes/ (e.g. sine)")->required();
-        app.add_option("--method", o.method, "Method name (see caustics list)")->required();
-        app.add_option("--set", a->sets, "Method parameter KEY=VALUE (repeatable)")
-            ->expected(1)
-            ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-        app.add_option("--frame", o.frame, "Animation frame")->check(CLI::NonNegativeNumber)->capture_default_str();
-        app.add_option("--out", o.out_dir, "Output folder (default results/render/<scene>/<method>)");
+        add_scene_argument(app, o.scene_path, "Scene file, or a scene name in scenes/ (e.g. sine)")->required();
+        add_method_option(app, o.method, "Method name (see caustics list)")->required();
+        add_assignment_option(app, "--set", a->sets, "Method parameter KEY=VALUE (repeatable, each KEY once)");
+        add_frame_option(app, o.frame);
+        add_output_folder_option(app, "--out", o.out_dir, "Output folder (default results/render/<scene>/<method>)");
         app.add_flag("--no-reference", o.no_reference, "Do not compute the reference; error values are null");
-        app.add_option("--photons", o.photons, "Reference photons")->check(CLI::PositiveNumber)->capture_default_str();
-        app.add_option("--warmup", o.warmup, "Untimed renders before timing")->check(CLI::NonNegativeNumber)->capture_default_str();
-        app.add_option("--repeats", o.repeats, "Timed renders")->check(CLI::PositiveNumber)->capture_default_str();
-        app.add_option("--threads", o.threads, "Worker threads (0: all cores)")->check(CLI::NonNegativeNumber);
-        app.add_option("--seed", o.seed, "Reference photon RNG seed")->capture_default_str();
-        app.add_option("--cache", o.cache_dir, "Reference cache folder (default $CAUSTICS_CACHE_DIR or results/cache)");
+        add_photons_option(app, o.photons, "Reference photons");
+        add_integer_option(app, "--warmup", o.warmup, 0, kMaxWarmup, "Untimed renders before timing")->capture_default_str();
+        add_integer_option(app, "--repeats", o.repeats, 1, kMaxRepeats, "Timed renders at least")->capture_default_str();
+        add_threads_option(app, o.threads, "Worker threads (0: all cores)");
+        add_seed_option(app, o.seed, "Reference photon RNG seed");
+        add_cache_option(app, o.cache_dir);
         add_reference_sampling_options(app, o.sampler, o.replicas, o.noise_target, o.photon_cap);
-        app.add_option("--truth", o.truth,
-                       "Receiver ground truth: auto (the analytic closed form where the scene has one, else the "
-                       "reference), analytic (say so where there is none) or reference")
-            ->check(CLI::IsMember({"auto", "analytic", "reference"}))
+        add_choice_option(app, "--truth", o.truth, {"auto", "analytic", "reference"},
+                          "Receiver ground truth: auto (the analytic closed form where the scene has one, else the "
+                          "reference), analytic (say so where there is none) or reference")
             ->capture_default_str();
-        app.add_option("--timing-precision", o.timing_precision,
-                       "Time frames until the median's 95 % interval is within this relative half-width")
-            ->check(CLI::Range(0.001, 1.0))
+        add_number_option(app, "--timing-precision", o.timing_precision, 0.001, 1.0,
+                          "Time frames until the median's 95 % interval is within this relative half-width")
             ->capture_default_str();
-        app.add_option("--max-time", o.timing_max_s, "Time cap of the timed frames in seconds (then flagged noisy_timing)")
-            ->check(CLI::Range(0.0, 3600.0))
+        add_number_option(app, "--max-time", o.timing_max_s, 0.0, 3600.0,
+                          "Time cap of the timed frames in seconds (then flagged noisy_timing)")
             ->capture_default_str();
         return [a]() { return run_render_command(*a); };
     };

@@ -28,17 +28,20 @@ Command make_sweep_command() {
     c.order = 40;
     c.setup = [](CLI::App& app) -> std::function<int()> {
         auto o = std::make_shared<SweepOptions>();
-        app.add_option("spec", o->spec_path, "Sweep spec (JSON), e.g. scripts/sweeps/quick.json")->required();
-        app.add_option("--out", o->out_dir, "Output folder (default results/sweeps/<spec name>)");
+        add_input_file_argument(app, "spec", o->spec_path, "Sweep spec (JSON), e.g. scripts/sweeps/quick.json",
+                                "a sweep spec (JSON), e.g. scripts/sweeps/quick.json")
+            ->required();
+        add_output_folder_option(app, "--out", o->out_dir, "Output folder (default results/sweeps/<spec name>)");
         app.add_flag("--resume", o->resume, "Continue a sweep in --out: skip finished runs, redo a cut-off one");
         app.add_option("--axis", o->axis_overrides, "Override an axis: METHOD.AXIS=VALUES, e.g. caustic_triangles.grid=[64,128]")
             ->expected(1)
             ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
         app.add_flag("--yes", o->yes, "Run a sweep of more than 500 runs");
-        app.add_option("--threads", o->threads, "Worker threads per run (0: all cores)")->check(CLI::NonNegativeNumber);
-        app.add_option("--cache", o->cache_dir, "Reference cache folder (default $CAUSTICS_CACHE_DIR or results/cache)");
-        app.add_option("--timeout", o->timeout_s, "Per-run time limit in seconds (default: the spec's timing.timeout_s)")
-            ->check(CLI::NonNegativeNumber);
+        add_threads_option(app, o->threads, "Worker threads per run (0: all cores)");
+        add_cache_option(app, o->cache_dir);
+        add_number_option(app, "--timeout", o->timeout_s, 0.0, 604800.0,
+                          "Per-run time limit in seconds (default: the spec's timing.timeout_s)",
+                          "0: the spec's timing.timeout_s, 604800 s: a week");
         return [o]() { return run_sweep_command(*o); };
     };
     return c;

@@ -23,8 +23,11 @@ int run_synth_command(SynthArgs a) {
     SynthOptions& o = a.options;
     o.overrides = parse_assignments(a.sets, "--set");
     o.gif = !a.no_gif;
-    if (o.out_dir.empty())
+    if (o.out_dir.empty()) {
+        // The default output folder is checked like a given --out, before any work.
         o.out_dir = (fs::path("results") / "synth" / fs::path(resolve_scene_path(o.scene_path)).stem() / o.method).string();
+        check_output_folder("--out", o.out_dir);
+    }
     const SynthResult r = run_synth(o);
     const auto& m = r.manifest;
     char buf[256];
@@ -47,19 +50,20 @@ Command make_synth_command() {
     c.setup = [](CLI::App& app) -> std::function<int()> {
         auto a = std::make_shared<SynthArgs>();
         SynthOptions& o = a->options;
-        app.add_option("scene", o.scene_path, "Scene file, or a scene name in scenes/ (e.g. ocean_tile); its water "
+        add_scene_argument(app, o.scene_path, "Scene file, or a scene name in scenes/ (e.g. ocean_tile); its water "
                                               "surface must use the periodic 'noise' generator")->required();
-        app.add_option("--method", o.method, "Method name; it must synthesise periodic textures (caustic_triangles, wave_optics)")
+        add_method_option(app, o.method, "Method name; it must synthesise periodic textures (caustic_triangles, wave_optics)")
             ->required();
-        app.add_option("--frames", o.frames, "Frames per time period (frame i at time i * period / frames)")
+        add_integer_option(app, "--frames", o.frames, 1, 10000, "Frames per time period (frame i at time i * period / frames)")
             ->capture_default_str();
-        app.add_option("--size", o.size, "Texture width in pixels (height follows the tile's aspect)")->capture_default_str();
-        app.add_option("--depth", o.depth, "Texture plane depth below the water's base height [m] (default: the receiver's)");
-        app.add_option("--set", a->sets, "Method parameter KEY=VALUE (repeatable)")
-            ->expected(1)
-            ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
-        app.add_option("--out", o.out_dir, "Output folder (default results/synth/<scene>/<method>)");
-        app.add_option("--threads", o.threads, "Worker threads (0: all cores)")->check(CLI::NonNegativeNumber);
+        add_integer_option(app, "--size", o.size, 8, 8192, "Texture width in pixels (height follows the tile's aspect)")
+            ->capture_default_str();
+        add_number_option(app, "--depth", o.depth, 0.0, 1000.0,
+                          "Texture plane depth below the water's base height [m] (default: the receiver's)",
+                          "0: the receiver's depth");
+        add_assignment_option(app, "--set", a->sets, "Method parameter KEY=VALUE (repeatable, each KEY once)");
+        add_output_folder_option(app, "--out", o.out_dir, "Output folder (default results/synth/<scene>/<method>)");
+        add_threads_option(app, o.threads, "Worker threads (0: all cores)");
         app.add_flag("--no-gif", a->no_gif, "Do not write preview.gif (the PNG frames are the preview)");
         return [a]() { return run_synth_command(*a); };
     };

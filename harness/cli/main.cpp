@@ -1,7 +1,10 @@
 // The `caustics` program (DESIGN.md section 7). Subcommands register themselves (command.hpp).
-// Exit codes: 0 success, 2 bad input or usage (one line "caustics: error: <message>" on stderr),
-// 1 internal failure.
+// Exit codes: 0 success, 2 bad input or usage, 1 internal failure. Every error is one line on stderr,
+//   caustics: error: <option or file>: <what is wrong>; valid: <what would be valid>
+// (options.hpp checks option values; usage_errors.hpp words CLI11's own usage errors; InputError
+// carries the rest).
 #include <exception>
+#include <functional>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -11,6 +14,7 @@
 
 #include "command.hpp"
 #include "errors.hpp"
+#include "usage_errors.hpp"
 
 namespace {
 
@@ -31,25 +35,28 @@ int main(int argc, char** argv) {
             std::function<int()> action;
         };
         std::vector<Entry> entries;
-        std::string names;
         bool known = argc < 2 || argv[1][0] == '-';
         for (const auto& command : caustics::cli::registered_commands()) {
             CLI::App* sub = app.add_subcommand(command.name, command.summary);
             entries.push_back({sub, command.setup(*sub)});
-            names += (names.empty() ? "" : ", ") + command.name;
             known = known || command.name == argv[1];
         }
-        if (!known) return report(std::string("unknown command '") + argv[1] + "'; valid commands: " + names, 2);
+        if (!known) return report(caustics::cli::unknown_command_message(app, argv[1]), 2);
         try {
             app.parse(argc, argv);
         } catch (const CLI::Success& e) {
             return app.exit(e);   // --help, --help-all (CallForHelp derives from Success)
         } catch (const CLI::ParseError& e) {
-            return report(e.what(), 2);
+            // An unknown option is named first: it is usually why something else looks missing.
+            if (auto unknown = caustics::cli::unknown_argument_message(app)) return report(*unknown, 2);
+            return report(caustics::cli::usage_error_message(app, e), 2);
+        } catch (const caustics::InputError& e) {   // a value refused by its option's check (options.hpp)
+            if (auto unknown = caustics::cli::unknown_argument_message(app)) return report(*unknown, 2);
+            throw;
         }
         for (const Entry& entry : entries)
             if (entry.app->parsed()) return entry.action();
-        return report("no subcommand given; run caustics --help", 2);
+        return report(caustics::cli::usage_error_message(app, CLI::RequiredError::Subcommand(1)), 2);
     } catch (const caustics::InputError& e) {
         return report(e.what(), 2);
     } catch (const std::exception& e) {

@@ -1,0 +1,227 @@
+// The bad-input catalog (issue 12), command-line part: every malformed option is refused up front with
+// exit 2 and one line "caustics: error: <option or file>: <what is wrong>; valid: <what would be valid>",
+// nothing written under --out and no cache entry (tests/catalog_support.hpp). Integer options state
+// human ranges, --photons is bounded like a sweep spec's reference.photons, --out and --cache are checked
+// before any work, and unknown flags, commands, scenes and methods list the valid choices.
+#include <algorithm>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "catalog_support.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using caustics::test_support::CaseDir;
+using caustics::test_support::check_refused;
+
+// What one case runs and what its message must mention; built in the case's own folder.
+struct Probe {
+    std::vector<std::string> args;
+    std::vector<std::string> expect;
+};
+
+struct CatalogCase {
+    std::string name;
+    std::function<Probe(const CaseDir&)> make;
+};
+
+// A small scene of its own, so that a regression that ignores --out writes into an obviously named
+// results/ folder rather than a shipped scene's.
+std::string small_scene(const CaseDir& d) {
+    return d.write("catalog_scene.json", R"({
+      "description": "catalog scene",
+      "lights": [{"type": "directional", "direction": [0, 0, -1], "irradiance": 1.0}],
+      "camera": {"position": [0, -1.3, 1.4], "look_at": [0, 0, -0.4], "up": [0, 0, 1], "fov_y": 45,
+                 "width": 16, "height": 12},
+      "objects": [
+        {"name": "water", "shape": "heightfield", "center": [0, 0], "size": [2, 2], "resolution": [16, 16],
+         "base_height": 0.0, "material": {"type": "dielectric", "ior": 1.33},
+         "generator": {"type": "sine", "amplitude": 0.01, "wavelength": 0.25, "direction": [1, 0],
+                       "phase": 0, "speed": 0}},
+        {"name": "floor", "shape": "plane", "center": [0, 0, -0.4], "u": [1, 0, 0], "v": [0, 1, 0],
+         "material": {"type": "diffuse", "albedo": [0.8, 0.8, 0.8]}}
+      ],
+      "receiver": {"object": "floor", "resolution": [16, 16]},
+      "animation": {"frames": 1, "fps": 30}
+    })");
+}
+
+// `base` with the options of `extra` appended; an option of `base` that `extra` gives again takes
+// extra's value instead (so a case states only what it is about; a repeat is made on purpose).
+std::vector<std::string> with(std::vector<std::string> base, const std::vector<std::string>& extra) {
+    const std::size_t own = base.size();   // only base's own options are replaced, never one appended here
+    for (std::size_t i = 0; i < extra.size(); ++i) {
+        const bool option = extra[i].rfind("--", 0) == 0 && i + 1 < extra.size() && extra[i + 1].rfind("--", 0) != 0;
+        const auto end = base.begin() + static_cast<std::ptrdiff_t>(own);
+        const auto at = option ? std::find(base.begin(), end, extra[i]) : end;
+        if (at != end && at + 1 != end) {
+            *(at + 1) = extra[++i];
+            continue;
+        }
+        base.push_back(extra[i]);
+    }
+    return base;
+}
+
+// `reference` of the small scene with few photons, --out and --cache in the case folder.
+std::vector<std::string> reference_args(const CaseDir& d, const std::vector<std::string>& extra) {
+    return with({"reference", small_scene(d), "--photons", "1000", "--out", d.out(), "--cache", d.cache()}, extra);
+}
+
+// `render` of the small scene, --out and --cache in the case folder.
+std::vector<std::string> render_args(const CaseDir& d, const std::vector<std::string>& extra) {
+    return with({"render", small_scene(d), "--method", "caustic_triangles", "--repeats", "1", "--warmup", "0", "--out",
+                 d.out(), "--cache", d.cache()},
+                extra);
+}
+
+
+const std::vector<CatalogCase>& cases() {
+    static const std::vector<CatalogCase> table = {
+        // Integer options: explicit human ranges, no wrap-around, no silent clamping.
+        {"PhotonsZero", [](const CaseDir& d) {
+             return Probe{reference_args(d, {"--photons", "0"}),
+                          {"--photons", "0 is out of range", "valid: an integer from 1000 to 100000000000"}};
+         }},
+        {"PhotonsNotANumber", [](const CaseDir& d) {
+             return Probe{reference_args(d, {"--photons", "many"}),
+                          {"--photons", "'many' is not an integer", "valid: an integer from 1000 to 100000000000"}};
+         }},
+        {"PhotonsPast64Bits", [](const CaseDir& d) {
+             return Probe{reference_args(d, {"--photons", "18446744073709551616"}),
+                          {"--photons", "18446744073709551616 is out of range", "100000000000"}};
+         }},
+        {"PhotonsAboveSpecBound", [](const CaseDir& d) {
+             return Probe{reference_args(d, {"--photons", "100000000001"}), {"--photons", "valid: an integer from 1000"}};
+         }},
+        {"RenderPhotonsBelowSpecBound", [](const CaseDir& d) {
+             return Probe{render_args(d, {"--photons", "999"}), {"--photons", "999 is out of range", "1000"}};
+         }},
+        {"SeedNegative", [](const CaseDir& d) {
+             return Probe{reference_args(d, {"--seed", "-1"}),
+                          {"--seed", "-1 is out of range", "valid: an integer from 0 to 4611686018427387904"}};
+         }},
+        {"WarmupPastInt", [](const CaseDir& d) {
+             return Probe{render_args(d, {"--warmup", "99999999999"}),
+                          {"--warmup", "99999999999 is out of range", "valid: an integer from 0 to 10000"}};
+         }},
+        {"RepeatsZero", [](const CaseDir& d) {
+             return Probe{render_args(d, {"--repeats", "0"}), {"--repeats", "valid: an integer from 1 to 100000"}};
+         }},
+        {"FrameNegative", [](const CaseDir& d) {
+             return Probe{reference_args(d, {"--frame", "-1"}), {"--frame", "valid: an integer from 0 to 1000000"}};
+         }},
+        {"ThreadsNotANumber", [](const CaseDir& d) {
+             return Probe{render_args(d, {"--threads", "all"}),
+                          {"--threads", "'all' is not an integer", "valid: an integer from 0"}};
+         }},
+        {"SynthFramesZero", [](const CaseDir& d) {
+             return Probe{{"synth", "ocean_tile", "--method", "caustic_triangles", "--frames", "0", "--out", d.out()},
+                          {"--frames", "valid: an integer from 1 to 10000"}};
+         }},
+        {"NoiseTargetNaN", [](const CaseDir& d) {
+             return Probe{reference_args(d, {"--noise-target", "nan"}),
+                          {"--noise-target", "not a finite number", "valid: a number from 0 to 10"}};
+         }},
+        {"SamplerUnknown", [](const CaseDir& d) {
+             return Probe{reference_args(d, {"--sampler", "halton"}),
+                          {"--sampler", "'halton'", "valid: sobol, independent"}};
+         }},
+        {"OptionGivenTwice", [](const CaseDir& d) {
+             std::vector<std::string> args = reference_args(d, {});
+             args.insert(args.end(), {"--photons", "2000"});
+             return Probe{args, {"--photons", "given 2 times", "valid: once"}};
+         }},
+        // --set: a repeated key is an error naming the key.
+        {"SetKeyTwice", [](const CaseDir& d) {
+             return Probe{render_args(d, {"--no-reference", "--set", "grid=32", "--set", "grid=64"}),
+                          {"--set", "'grid' given twice", "grid=32", "grid=64", "valid:"}};
+         }},
+        // --cache must be a folder.
+        {"CacheIsAFile", [](const CaseDir& d) {
+             const std::string file = d.write("cache_file", "not a folder");
+             return Probe{{"reference", small_scene(d), "--photons", "1000", "--out", d.out(), "--cache", file},
+                          {"--cache", file, "is a file", "valid:"}};
+         }},
+        // --out: checked before any work.
+        {"OutEmpty", [](const CaseDir& d) {
+             return Probe{reference_args(d, {"--out", ""}), {"--out", "empty path", "valid:"}};
+         }},
+        {"OutIsAFile", [](const CaseDir& d) {
+             const std::string file = d.write("out_file", "not a folder");
+             return Probe{reference_args(d, {"--out", file}), {"--out", file, "is a file", "valid:"}};
+         }},
+        {"OutUnderAFile", [](const CaseDir& d) {
+             const std::string file = d.write("out_file", "not a folder");
+             return Probe{reference_args(d, {"--out", file + "/sub"}), {"--out", file + "/sub", "under", file}};
+         }},
+        {"OutUnderProc", [](const CaseDir& d) {
+             return Probe{reference_args(d, {"--out", "/proc/caustics_catalog_out"}),
+                          {"--out", "/proc/caustics_catalog_out", "/proc", "valid:"}};
+         }},
+        {"OutThroughSymlinkLoop", [](const CaseDir& d) {
+             fs::create_symlink("loop_b", d.path() / "loop_a");
+             fs::create_symlink("loop_a", d.path() / "loop_b");
+             return Probe{reference_args(d, {"--out", d.file("loop_a") + "/out"}), {"--out", "loop_a", "symbolic link loop"}};
+         }},
+        {"RenderOutIsAFile", [](const CaseDir& d) {
+             const std::string file = d.write("out_file", "not a folder");
+             return Probe{{"render", small_scene(d), "--method", "caustic_triangles", "--no-reference", "--repeats", "1",
+                           "--warmup", "0", "--out", file},
+                          {"--out", file, "is a file"}};
+         }},
+        {"SweepOutIsAFile", [](const CaseDir& d) {
+             const std::string file = d.write("out_file", "not a folder");
+             const std::string spec = d.write("spec.json", R"({"scenes": ["sine"], "methods": {"caustic_triangles": {"grid": [16]}}})");
+             return Probe{{"sweep", spec, "--cache", d.cache(), "--out", file}, {"--out", file, "is a file"}};
+         }},
+        // Valid choices are listed.
+        {"UnknownFlagListsOptions", [](const CaseDir& d) {
+             return Probe{render_args(d, {"--photns", "2000"}),
+                          {"--photns", "unknown option", "valid:", "--photons", "--method", "--set", "--no-reference"}};
+         }},
+        {"MissingCommandListsCommands", [](const CaseDir&) {
+             return Probe{{}, {"COMMAND", "missing", "valid:", "list", "reference", "render", "sweep", "report", "synth"}};
+         }},
+        {"UnknownSceneNameListsScenes", [](const CaseDir& d) {
+             return Probe{{"render", "no_such_scene_name", "--method", "caustic_triangles", "--out", d.out()},
+                          {"no_such_scene_name", "valid:", "sine", "pool", "bunny"}};
+         }},
+        {"MissingSceneListsScenes", [](const CaseDir& d) {
+             return Probe{{"render", "--method", "caustic_triangles", "--out", d.out()}, {"SCENE", "missing", "valid:", "sine"}};
+         }},
+        {"UnknownMethodListsMethods", [](const CaseDir& d) {
+             return Probe{render_args(d, {"--method", "caustic_trangles"}),
+                          {"--method", "caustic_trangles", "valid:", "caustic_triangles", "wave_optics", "eikonal_fmm"}};
+         }},
+        {"SceneSymlinkLoop", [](const CaseDir& d) {
+             fs::create_symlink("scene_b.json", d.path() / "scene_a.json");
+             fs::create_symlink("scene_a.json", d.path() / "scene_b.json");
+             return Probe{{"render", d.file("scene_a.json"), "--method", "caustic_triangles", "--out", d.out()},
+                          {"scene_a.json", "symbolic link loop"}};
+         }},
+    };
+    return table;
+}
+
+class CatalogCli : public ::testing::TestWithParam<CatalogCase> {};
+
+TEST_P(CatalogCli, RefusedUpFront) {
+    const CatalogCase& c = GetParam();
+    const CaseDir dir("cli_" + c.name);
+    const Probe p = c.make(dir);
+    // A refusal is immediate: the limit is far below what computing a reference would take.
+    caustics::test_support::RefusalLimits limits;
+    limits.seconds = 30;
+    check_refused(dir, p.args, p.expect, limits);
+}
+
+INSTANTIATE_TEST_SUITE_P(Catalog, CatalogCli, ::testing::ValuesIn(cases()),
+                         [](const ::testing::TestParamInfo<CatalogCase>& info) { return info.param.name; });
+
+}  // namespace
