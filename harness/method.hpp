@@ -57,6 +57,22 @@ struct TextureRequest {
     double depth = 1.0;   // [m] below the water's base height
 };
 
+// The accuracy a method claims on one frame of a scene at its current parameters. The conformance suite
+// (tests/test_conformance.cpp) holds every registered method to it on analytic cases: inside the claimed
+// regime, the receiver error against the exact truth (nrmse; after the least-squares scale fit where the
+// output is not radiometric) is at most `error_vs_baseline` times the error of drawing no caustic (the
+// flat interface's irradiance, harness/baseline.hpp). Outside it (`inside` false), `reason` names the
+// bound the frame passes, with the numbers (e.g. "the floor lies 1.2 m down, past the first focus at
+// 0.64 m"): the method still renders, its error is still measured and reported, but nothing is claimed.
+// A case a method cannot render at all is refused by capabilities() instead.
+struct AccuracyClaim {
+    bool inside = true;
+    double error_vs_baseline = 0.5;
+    std::string reason;
+    static AccuracyClaim within(double factor) { return {true, factor, {}}; }
+    static AccuracyClaim outside(std::string why) { return {false, 0.0, std::move(why)}; }
+};
+
 struct RenderRequest {
     const ReceiverChart* receiver = nullptr;     // fill CausticOutput::receiver when non-null
     const CameraGBuffer* camera = nullptr;       // fill CausticOutput::camera when non-null
@@ -87,6 +103,10 @@ public:
     virtual void prepare(const Scene& /*scene*/) {}
     virtual void update(const FrameGeometry& /*frame*/) {}
     virtual CausticOutput render(const FrameGeometry& frame, const RenderRequest& request) = 0;
+    // The accuracy this method claims on `frame` (asked after update(frame)). The default claims half
+    // the no-caustic baseline's error everywhere, which a method added later is held to until it
+    // states its own regime.
+    virtual AccuracyClaim accuracy_claim(const FrameGeometry& /*frame*/) const { return AccuracyClaim::within(0.5); }
 };
 
 struct MethodInfo {
