@@ -113,6 +113,10 @@ struct MethodInfo {
     std::string name;
     std::string doc;
     bool radiometric = true;        // false: output is relative; metrics add a least-squares fit
+    // Where a parameter switches the output between radiometric and relative values (an output mode):
+    // the answer for a parameter set. Unset: `radiometric` for every parameter set.
+    std::function<bool(const ParamSet&)> radiometric_for;
+    bool radiometric_at(const ParamSet& p) const { return radiometric_for ? radiometric_for(p) : radiometric; }
     std::vector<ParamSpec> params;  // must contain `grid` and `iterations`
     std::function<std::unique_ptr<Method>(const ParamSet&)> create;
 };

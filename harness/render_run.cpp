@@ -68,7 +68,7 @@ json metrics_skeleton(const SceneFrame& sf, const ResolvedMethod& m, const Rende
     j["scene"] = sf.scene().name;
     j["frame"] = sf.geometry().frame;
     j["params"] = params_json(*m.info, m.params);
-    j["radiometric"] = m.info->radiometric;
+    j["radiometric"] = m.info->radiometric_at(m.params);
     j["time_ms"] = timing_json(nullptr);
     j["frame_ms"] = timing_json(nullptr);
     j["frame_time"] = nullptr;
@@ -312,7 +312,7 @@ RenderRun run_method(const SceneFrame& sf, const ResolvedMethod& m, const Render
         if (!unstable) {
             if (!out.receiver.empty()) {
                 const Baseline baseline = make_baseline(flat_interface_baseline(sf.geometry(), sf.chart()), *truth.mean);
-                const ViewErrors e = measure_view(out.receiver, truth, nullptr, info.radiometric, &baseline.map);
+                const ViewErrors e = measure_view(out.receiver, truth, nullptr, info.radiometric_at(m.params), &baseline.map);
                 j["error"]["receiver"] = e.json;
                 // Only a noisy truth can hide an error; against a closed form the question does not arise.
                 if (e.net.valid && !truth.exact()) j["below_reference_noise"] = e.net.includes_zero;
@@ -327,11 +327,11 @@ RenderRun run_method(const SceneFrame& sf, const ResolvedMethod& m, const Render
                 if (reference->camera_covered.size() == mask.size())
                     for (std::size_t p = 0; p < mask.size(); ++p) mask[p] &= reference->camera_covered[p];
                 const TruthMaps camera_truth{&reference->camera, &reference->camera_replicas, &reference->camera_stderr};
-                const ViewErrors e = measure_view(out.camera, camera_truth, &mask, info.radiometric, nullptr);
+                const ViewErrors e = measure_view(out.camera, camera_truth, &mask, info.radiometric_at(m.params), nullptr);
                 j["error"]["camera"] = e.json;
                 if (e.samples == 0) messages.push_back("camera view: no pixel's primary hit is a diffuse receiver");
             }
-            if (!info.radiometric)
+            if (!info.radiometric_at(m.params))
                 messages.push_back("not radiometric: nrmse_fit/fit_scale are after a least-squares scale fit");
         }
     } else {

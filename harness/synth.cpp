@@ -281,7 +281,7 @@ SynthResult run_synth(const SynthOptions& options) {
     m["scene_path"] = plan.scene.path;
     m["method"] = plan.method.info->name;
     m["params"] = params_json(*plan.method.info, plan.method.params);
-    m["radiometric"] = plan.method.info->radiometric;
+    m["radiometric"] = plan.method.info->radiometric_at(plan.method.params);
     m["frames"] = plan.frames;
     m["size"] = {plan.texture.width, plan.texture.height};
     m["period"] = plan.period;
