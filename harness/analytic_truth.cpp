@@ -210,12 +210,19 @@ AnalyticTruth analytic_truth(const FrameGeometry& frame, const ReceiverChart& ch
     const HeightFieldDesc& desc = wo.heightfield;
     if (wo.shape != ShapeType::HeightField || !water->heightfield)
         return fail("'" + wo.name + "' is not a height field");
-    if (desc.generator != HeightGenerator::Sine) return fail("the height field '" + wo.name + "' is not a sine");
+    if (desc.generator != HeightGenerator::Sine && desc.generator != HeightGenerator::Gaussian)
+        return fail("the height field '" + wo.name + "' is neither a sine nor a Gaussian bump");
     if (wo.material.type != MaterialType::Dielectric) return fail("'" + wo.name + "' is not a dielectric");
     if (wo.material.dispersion != 0.0) return fail("the water is dispersive: its index varies over the band");
     const Object& ro = scene.receiver_object();
     if (ro.shape != ShapeType::Plane) return fail("the receiver '" + ro.name + "' is not a plane");
     if (ro.material.type != MaterialType::Diffuse) return fail("the receiver '" + ro.name + "' is not diffuse");
+    {
+        const double u_len = glm::length(ro.u), v_len = glm::length(ro.v);
+        if (!near(ro.u.z, 0.0, 1e-9 * u_len) || !near(ro.v.z, 0.0, 1e-9 * v_len))
+            return fail("the receiver is not horizontal");
+    }
+    if (desc.generator == HeightGenerator::Gaussian) return radial_bump_truth(frame, chart, *water);
 
     // The sine's direction, as the generator normalises it, must run along an edge of the water's
     // rectangle, so that its extent along the sine is the same at every point across it.

@@ -2,7 +2,8 @@
 // Analytic ground truth (DESIGN.md section 5): where a scene has an exact closed form, its receiver map
 // serves as the ground truth and the Monte Carlo reference is tested against it (tests/test_analytic_truth.cpp).
 //
-// The closed form here is the refracting 1-D sine surface h(s) = A sin(k s + phase + k speed t) lit by a
+// Two closed forms: the Gaussian bump at normal incidence before its first focus (RadialBump below), and
+// the refracting 1-D sine surface h(s) = A sin(k s + phase + k speed t) lit by a
 // directional light in the sine's vertical plane, at any tilt and depth (folds included): every ray stays
 // in its vertical plane, so the receiver map is a 1-D profile along the sine times the water's extent
 // across it. The profile is the exact Snell mapping s -> X(s) of fine source strips (a histogram of the
@@ -22,7 +23,7 @@ namespace caustics {
 
 struct AnalyticTruth {
     bool available = false;
-    std::string kind;      // "analytic:sine" when available
+    std::string kind;      // "analytic:sine" or "analytic:gaussian" when available
     std::string reason;    // why not, when !available
     Image receiver;        // exact bin-averaged caustic irradiance E_c [W/m^2], chart.width() x chart.height() x 1
 };
@@ -31,6 +32,8 @@ struct AnalyticTruth {
 // reason. Applies to: one directional light; one `sine` height field of a non-dispersive dielectric and the
 // receiver (a horizontal rectangle below the water whose u or v is parallel to the sine's direction, which
 // runs along an edge of the water's rectangle); no medium; the light in the sine's vertical plane (any tilt).
+// Or one `gaussian` height field lit straight down, the floor before the bump's first focus, the receiver
+// seeing only light that entered through the water's rectangle.
 AnalyticTruth analytic_truth(const FrameGeometry& frame, const ReceiverChart& chart);
 
 // A histogram of a 1-D mapping x -> X of source strips: each strip's flux is spread uniformly over its
@@ -129,5 +132,34 @@ bool sine_profile(const SinePlane& plane, double lo, double hi, int bins, std::s
 
 // The default number of source strips for a profile with bins of width bin_w along s.
 std::size_t sine_profile_segments(const SinePlane& plane, double bin_w);
+
+// The Gaussian bump h(r) = base + A exp(-r^2 / (2 sigma^2)) lit straight down, in a vertical plane through
+// its axis: r the distance from the axis (analytic_truth_radial.cpp).
+struct RadialProfile;
+struct RadialBump {
+    double amplitude = 0.0, sigma = 0.1, base = 0.0;
+    double ior = 1.33, absorption = 0.0;
+    bool fresnel = false;
+    double irradiance = 1.0;   // E0 [W/m^2], the light along -z
+    double floor_z = -1.0;
+
+    double height(double r) const { return base + amplitude * std::exp(-0.5 * r * r / (sigma * sigma)); }
+    double slope(double r) const { return -amplitude * r / (sigma * sigma) * std::exp(-0.5 * r * r / (sigma * sigma)); }
+    struct Ray {
+        bool ok = false;       // transmitted downwards
+        double landing = 0.0;  // radius R where the refracted ray meets the floor (signed: < 0 across the axis)
+        double density = 0.0;  // flux per unit horizontal area at r that reaches the floor [W/m^2]
+    };
+    Ray trace(double r) const;
+    // The map r -> R on [0, r_max]; false with the reason where it is not increasing (past the focus).
+    bool profile(double r_max, RadialProfile& out, std::string& reason) const;
+};
+struct RadialProfile {
+    std::vector<double> r, R, density;
+    // E(R) = density(r) r / (R dR/dr) at the preimage r of R.
+    double irradiance(double R) const;
+};
+struct ObjectInstance;
+AnalyticTruth radial_bump_truth(const FrameGeometry& frame, const ReceiverChart& chart, const ObjectInstance& water);
 
 }  // namespace caustics

@@ -71,6 +71,7 @@ public:
     // Periodic textures: any scene this method supports (the caller checks that the surface tiles).
     Capability texture_capability(const Scene& scene) const override { return capabilities(scene); }
     CausticOutput render(const FrameGeometry& frame, const RenderRequest& request) override;
+    AccuracyClaim accuracy_claim(const FrameGeometry& frame) const override;
 
 private:
     struct Counters {

@@ -1,0 +1,52 @@
+#pragma once
+// The analytic cases of the conformance suite (tests/test_conformance.cpp): scenes whose receiver map has
+// an exact closed form (harness/analytic_truth.hpp), chosen to contain what a method's model may miss:
+// oblique light, a floor past the first focus (folds), ior = 1, Fresnel and absorption on a slanted path,
+// a 2-D (radial) caustic. Each is a shipped scene file, or one edited in code where no file is needed.
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "scene.hpp"
+
+namespace caustics::test_support {
+
+struct ConformanceCase {
+    std::string name;
+    std::string what;            // one line: what the case exercises
+    std::function<Scene()> scene;
+    bool flat_truth = false;     // the truth is constant over the bins it lights: the map must be flat
+};
+
+inline Scene shipped_scene(const std::string& name) {
+    return load_scene(std::string(CAUSTICS_SOURCE_DIR) + "/scenes/" + name + ".json");
+}
+
+inline std::vector<ConformanceCase> conformance_cases() {
+    std::vector<ConformanceCase> cases;
+    cases.push_back({"sine", "1-D sine, normal incidence, floor above the first focus",
+                     [] { return shipped_scene("sine"); }});
+    cases.push_back({"sine_oblique", "the same sine lit 30 deg off the vertical",
+                     [] { return shipped_scene("sine_oblique"); }});
+    cases.push_back({"sine_deep", "floor 1.2 m down, past the first focus (folds), absorption 0.5 /m",
+                     [] { return shipped_scene("sine_deep"); }});
+    cases.push_back({"sine_ior1", "ior = 1: the interface does not refract, the truth is flat",
+                     [] { return shipped_scene("sine_ior1"); }, true});
+    cases.push_back({"flat_oblique", "flat water lit 30 deg off the vertical, Fresnel, absorption 0.5 /m",
+                     [] {
+                         Scene s = shipped_scene("sine_oblique");
+                         for (Object& o : s.objects)
+                             if (o.shape == ShapeType::HeightField) {
+                                 o.heightfield.amplitude = 0.0;
+                                 o.material.absorption = 0.5;
+                             }
+                         s.fresnel = true;
+                         return s;
+                     },
+                     true});
+    cases.push_back({"gaussian", "radial Gaussian bump, normal incidence, before its focus",
+                     [] { return shipped_scene("gaussian"); }});
+    return cases;
+}
+
+}  // namespace caustics::test_support
