@@ -208,6 +208,15 @@ AnalyticTruth analytic_truth(const FrameGeometry& frame, const ReceiverChart& ch
     if (!water) return fail("no object besides the receiver");
     const Object& wo = *water->object;
     const HeightFieldDesc& desc = wo.heightfield;
+    if (wo.shape == ShapeType::Sphere) {
+        const Object& ro = scene.receiver_object();
+        if (ro.shape != ShapeType::Plane || ro.material.type != MaterialType::Diffuse)
+            return fail("the receiver '" + ro.name + "' is not a diffuse plane");
+        const double u_len = glm::length(ro.u), v_len = glm::length(ro.v);
+        if (!near(ro.u.z, 0.0, 1e-9 * u_len) || !near(ro.v.z, 0.0, 1e-9 * v_len))
+            return fail("the receiver is not horizontal");
+        return ball_lens_truth(frame, chart, *water);
+    }
     if (wo.shape != ShapeType::HeightField || !water->heightfield)
         return fail("'" + wo.name + "' is not a height field");
     if (desc.generator != HeightGenerator::Sine && desc.generator != HeightGenerator::Gaussian)

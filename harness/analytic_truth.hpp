@@ -2,9 +2,9 @@
 // Analytic ground truth (DESIGN.md section 5): where a scene has an exact closed form, its receiver map
 // serves as the ground truth and the Monte Carlo reference is tested against it (tests/test_analytic_truth.cpp).
 //
-// Two closed forms: the Gaussian bump at normal incidence before its first focus (RadialBump below), and
-// the refracting 1-D sine surface h(s) = A sin(k s + phase + k speed t) lit by a
-// directional light in the sine's vertical plane, at any tilt and depth (folds included): every ray stays
+// Three closed forms: the ball lens (BallLens below) and the Gaussian bump before its first focus
+// (RadialBump), both lit straight down, and the refracting 1-D sine surface h(s) = A sin(k s + phase +
+// k speed t) lit by a directional light in the sine's vertical plane, at any tilt and depth (folds included): every ray stays
 // in its vertical plane, so the receiver map is a 1-D profile along the sine times the water's extent
 // across it. The profile is the exact Snell mapping s -> X(s) of fine source strips (a histogram of the
 // mapped strips, each carrying the flux the beam sends through it), which converges to the bin average of
@@ -23,7 +23,7 @@ namespace caustics {
 
 struct AnalyticTruth {
     bool available = false;
-    std::string kind;      // "analytic:sine" or "analytic:gaussian" when available
+    std::string kind;      // "analytic:sine", "analytic:gaussian" or "analytic:ball_lens" when available
     std::string reason;    // why not, when !available
     Image receiver;        // exact bin-averaged caustic irradiance E_c [W/m^2], chart.width() x chart.height() x 1
 };
@@ -33,7 +33,8 @@ struct AnalyticTruth {
 // receiver (a horizontal rectangle below the water whose u or v is parallel to the sine's direction, which
 // runs along an edge of the water's rectangle); no medium; the light in the sine's vertical plane (any tilt).
 // Or one `gaussian` height field lit straight down, the floor before the bump's first focus, the receiver
-// seeing only light that entered through the water's rectangle.
+// seeing only light that entered through the water's rectangle. Or one dielectric sphere lit straight down
+// over a horizontal floor, without Fresnel reflection (BallLens).
 AnalyticTruth analytic_truth(const FrameGeometry& frame, const ReceiverChart& chart);
 
 // A histogram of a 1-D mapping x -> X of source strips: each strip's flux is spread uniformly over its
@@ -159,7 +160,27 @@ struct RadialProfile {
     // E(R) = density(r) r / (R dR/dr) at the preimage r of R.
     double irradiance(double R) const;
 };
+// A dielectric sphere (ball lens) lit straight down over a horizontal floor, in a meridional plane: h the
+// entry point's distance from the axis (analytic_truth_ball.cpp). Without Fresnel reflection (scene.fresnel
+// false) every entering ray is refracted twice and nothing else: the closed form is exact.
+struct BallLens {
+    double radius = 0.5, ior = 1.5, absorption = 0.0;
+    bool fresnel = false;      // multiply by both interfaces' transmittance (for tests of the map alone)
+    double irradiance = 1.0;   // E0 [W/m^2], the light along -z
+    double depth = 1.0;        // floor below the centre
+    struct Ray {
+        bool ok = false;             // reaches the floor
+        double landing = 0.0;        // signed radius on the floor
+        double transmittance = 1.0;  // Fresnel (if on) and absorption along the chord
+    };
+    Ray trace(double h) const;
+    // Caustic irradiance per radial bin of width r_max / bins on the floor (the light through the ball;
+    // the direct light around it is not caustic).
+    std::vector<double> radial_irradiance(double r_max, int bins) const;
+};
+
 struct ObjectInstance;
+AnalyticTruth ball_lens_truth(const FrameGeometry& frame, const ReceiverChart& chart, const ObjectInstance& ball);
 AnalyticTruth radial_bump_truth(const FrameGeometry& frame, const ReceiverChart& chart, const ObjectInstance& water);
 
 }  // namespace caustics

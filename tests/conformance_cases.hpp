@@ -2,11 +2,13 @@
 // The analytic cases of the conformance suite (tests/test_conformance.cpp): scenes whose receiver map has
 // an exact closed form (harness/analytic_truth.hpp), chosen to contain what a method's model may miss:
 // oblique light, a floor past the first focus (folds), ior = 1, Fresnel and absorption on a slanted path,
-// a 2-D (radial) caustic. Each is a shipped scene file, or one edited in code where no file is needed.
+// a 2-D (radial) caustic, a solid refractor whose map folds into a ring. Each is a shipped scene file, or
+// one built in code where no file is needed.
 #include <functional>
 #include <string>
 #include <vector>
 
+#include "ball_lens.hpp"
 #include "scene.hpp"
 
 namespace caustics::test_support {
@@ -46,6 +48,8 @@ inline std::vector<ConformanceCase> conformance_cases() {
                      true});
     cases.push_back({"gaussian", "radial Gaussian bump, normal incidence, before its focus",
                      [] { return shipped_scene("gaussian"); }});
+    cases.push_back({"ball_lens", "glass sphere (n 1.5) lit along its axis, floor past the paraxial focus (ring fold)",
+                     [] { return BallLens{}.scene(); }});
     return cases;
 }
 
