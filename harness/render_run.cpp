@@ -90,6 +90,7 @@ json metrics_skeleton(const SceneFrame& sf, const ResolvedMethod& m, const Rende
     j["repeats"] = options.repeats;
     j["below_reference_noise"] = nullptr;
     j["no_better_than_flat"] = nullptr;
+    j["claim"] = {{"inside", nullptr}, {"error_vs_baseline", nullptr}, {"reason", nullptr}, {"met", nullptr}};
     j["message"] = "";
     return j;
 }
@@ -285,6 +286,13 @@ RenderRun run_method(const SceneFrame& sf, const ResolvedMethod& m, const Render
     for (const auto& [name, value] : out.health.counters) health[name] = value;
     health["nonfinite_pixels"] = nonfinite;
     j["health"] = health;
+    // What the method claims on this frame (Method::accuracy_claim); `met` is filled once the error is known.
+    const AccuracyClaim claim = method->accuracy_claim(sf.geometry());
+    j["claim"] = {{"inside", claim.inside},
+                  {"error_vs_baseline", claim.inside ? json_number(claim.error_vs_baseline) : json(nullptr)},
+                  {"reason", claim.inside ? json(nullptr) : json(claim.reason)},
+                  {"met", nullptr}};
+    if (!claim.inside) messages.push_back("outside the method's claimed regime: " + claim.reason);
     const bool unstable = nonfinite > 0 || out.health.get("nonfinite") > 0;
     run.status = unstable ? "unstable" : "ok";
     if (unstable)
@@ -317,6 +325,14 @@ RenderRun run_method(const SceneFrame& sf, const ResolvedMethod& m, const Render
                 // Only a noisy truth can hide an error; against a closed form the question does not arise.
                 if (e.net.valid && !truth.exact()) j["below_reference_noise"] = e.net.includes_zero;
                 j["baseline"] = {{"kind", baseline.kind}, {"error", e.have_baseline ? json_number(e.baseline_error) : json(nullptr)}};
+                // Judged like the conformance suite: the plain error (after the fit where not radiometric)
+                // against the claimed multiple of the baseline's; exact truths only (a noisy one is judged by
+                // the net error's interval, which the report shows).
+                if (claim.inside && e.have_baseline && truth.exact() && e.baseline_error > 0.0) {
+                    const char* key = info.radiometric_at(m.params) ? "nrmse" : "nrmse_fit";
+                    if (e.json.contains(key) && e.json[key].is_number())
+                        j["claim"]["met"] = e.json[key].get<double>() <= claim.error_vs_baseline * e.baseline_error;
+                }
                 if (e.net.valid && e.have_baseline) {
                     j["no_better_than_flat"] = e.no_better_than_flat;
                     if (e.no_better_than_flat) messages.push_back("no better than the no-caustic baseline (" + baseline.kind + ")");

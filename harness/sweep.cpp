@@ -385,6 +385,10 @@ std::string results_csv(const SweepSpec& spec, const std::vector<json>& rows) {
     add("baseline_kind", {"baseline", "kind"});
     add("error_vs_baseline", {"error", "receiver", "error_vs_baseline"});
     add("no_better_than_flat", {"no_better_than_flat"});
+    add("claim_inside", {"claim", "inside"});
+    add("claim_error_vs_baseline", {"claim", "error_vs_baseline"});
+    add("claim_met", {"claim", "met"});
+    add("claim_reason", {"claim", "reason"});
     add("truth", {"truth", "kind"});
     columns.push_back({"noise_nrmse", [](const json& r) {
                            // The noise of the truth the errors are measured against (0 for a closed form).

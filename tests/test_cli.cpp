@@ -216,9 +216,11 @@ TEST_F(CliTest, RenderWritesFilesAndKeys) {
     for (const char* k : {"method", "scene", "frame", "params", "radiometric", "time_ms", "fps", "prepare_ms",
                           "update_ms", "stages_ms", "threads", "error", "reference", "health", "status",
                           "build_type", "warmup", "repeats", "below_reference_noise", "message", "frame_ms",
-                          "frame_time", "render_fps", "noisy_timing", "truth", "baseline", "no_better_than_flat"})
+                          "frame_time", "render_fps", "noisy_timing", "truth", "baseline", "no_better_than_flat",
+                          "claim"})
         EXPECT_TRUE(m.contains(k)) << k;
-    EXPECT_EQ(m.size(), 27u) << m.dump(2);
+    EXPECT_EQ(m.size(), 28u) << m.dump(2);
+    for (const char* k : {"inside", "error_vs_baseline", "reason", "met"}) EXPECT_TRUE(m["claim"].contains(k)) << k;
     for (const char* t : {"time_ms", "frame_ms"})
         for (const char* k : {"median", "min", "p90", "stdev", "iqr", "ci_rel"}) {
             ASSERT_TRUE(m[t].contains(k)) << t << "." << k;

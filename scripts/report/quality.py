@@ -51,7 +51,16 @@ def scene_quality(frame, scene, target):
             "below_reference_noise": int(runs["below_reference_noise"].sum()),
             "noisy_timing": int(runs["noisy_timing"].sum()),
             "no_better_than_flat": int(runs["no_better_than_flat"].sum()),
-            "noise_target_missed": int((~targeted["noise_target_met"]).sum())}
+            "noise_target_missed": int((~targeted["noise_target_met"]).sum()),
+            "outside_claim": _count_false(runs, "claim_inside"),
+            "claim_missed": _count_false(runs, "claim_met")}
+
+
+def _count_false(runs, column):
+    """Runs whose column reads false; an empty cell (not judged, or an older sweep) is not counted."""
+    if column not in runs:
+        return 0
+    return int((runs[column].astype(str).str.strip().str.lower() == "false").sum())
 
 
 def scene_lines(q):
@@ -78,6 +87,12 @@ def scene_lines(q):
     counts = (f"Of {q['runs']} ok runs: {q['below_reference_noise']} below the reference noise (95 % interval "
               f"includes 0), {q['noisy_timing']} with noisy timing, {q['no_better_than_flat']} no better than the "
               f"no-caustic baseline.")
+    if q["outside_claim"]:
+        counts += (f" {q['outside_claim']} run(s) lie outside their method's claimed regime (results.csv "
+                   f"claim_reason says which bound).")
+    if q["claim_missed"]:
+        counts += (f" **{q['claim_missed']} run(s) missed the accuracy their method claims** "
+                   f"(claim_met false: error above the claimed multiple of the baseline's).")
     if q["noise_target_missed"]:
         counts += f" {q['noise_target_missed']} run(s) used a reference that missed its noise target."
     lines.append(counts)
