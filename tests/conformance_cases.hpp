@@ -2,13 +2,12 @@
 // The analytic cases of the conformance suite (tests/test_conformance.cpp): scenes whose receiver map has
 // an exact closed form (harness/analytic_truth.hpp), chosen to contain what a method's model may miss:
 // oblique light, a floor past the first focus (folds), ior = 1, Fresnel and absorption on a slanted path,
-// a 2-D (radial) caustic, a solid refractor whose map folds into a ring. Each is a shipped scene file, or
-// one built in code where no file is needed.
+// a 2-D (radial) caustic, a solid refractor whose map folds into a ring. Each is a shipped scene file
+// (scenes/README.md), so that sweeps and reports can run the same cases.
 #include <functional>
 #include <string>
 #include <vector>
 
-#include "ball_lens.hpp"
 #include "scene.hpp"
 
 namespace caustics::test_support {
@@ -35,21 +34,11 @@ inline std::vector<ConformanceCase> conformance_cases() {
     cases.push_back({"sine_ior1", "ior = 1: the interface does not refract, the truth is flat",
                      [] { return shipped_scene("sine_ior1"); }, true});
     cases.push_back({"flat_oblique", "flat water lit 30 deg off the vertical, Fresnel, absorption 0.5 /m",
-                     [] {
-                         Scene s = shipped_scene("sine_oblique");
-                         for (Object& o : s.objects)
-                             if (o.shape == ShapeType::HeightField) {
-                                 o.heightfield.amplitude = 0.0;
-                                 o.material.absorption = 0.5;
-                             }
-                         s.fresnel = true;
-                         return s;
-                     },
-                     true});
+                     [] { return shipped_scene("flat_oblique"); }, true});
     cases.push_back({"gaussian", "radial Gaussian bump, normal incidence, before its focus",
                      [] { return shipped_scene("gaussian"); }});
     cases.push_back({"ball_lens", "glass sphere (n 1.5) lit along its axis, floor past the paraxial focus (ring fold)",
-                     [] { return BallLens{}.scene(); }});
+                     [] { return shipped_scene("ball_lens"); }});
     return cases;
 }
 
