@@ -209,7 +209,7 @@ TEST(SweepSpec, RunCountAndCeiling) {
 
 // The shipped specs stay valid under the duplicate and size checks (paper.json needs --yes, not more).
 TEST(SweepSpec, ShippedSpecsLoad) {
-    for (const char* name : {"quick", "paper"}) {
+    for (const char* name : {"quick", "paper", "conformance"}) {
         const std::string path = std::string(CAUSTICS_SOURCE_DIR) + "/scripts/sweeps/" + name + ".json";
         SweepSpec spec;
         ASSERT_NO_THROW(spec = load_sweep_spec(path)) << name;
