@@ -14,7 +14,7 @@
 // output=curvature init_time=paper restores the paper's method.
 //
 // Parameters (the table below is the documentation `caustics list` prints):
-//   grid        cells along the longer horizontal side of the volume (z at the same spacing)
+//   grid        cells along the longer side of the receivers' footprint (paper: of the volume); z alike
 //   iterations  viscosity post-process: xy dissipation steps per layer below threshold_height; 0 = off
 //   solver      fmm (Sethian's fast marching, binary heap) | sweep (downward layer-by-layer sweeping)
 //   order       1 | 2 (Rickett & Fomel second-order upwind differences)
@@ -207,9 +207,12 @@ private:
     eikonal::Workspace workspace_;  // the eikonal solution; its storage is reused by the next update
 };
 
-// The error factor (nrmse / the flat baseline's nrmse) claimed for output=transport before the first
-// focus; measured in README.md (worst measured ratio inside the regime, with margin).
-constexpr double kTransportClaim = 0.5;
+// The error factor (nrmse / the flat baseline's nrmse) claimed for output=transport at least
+// kResolveCells cells above the first focus; measured in README.md (largest ratio inside: 0.43 on the
+// gaussian bump, the Monte Carlo reference's own noise; 0.42 on sine_oblique at grid 256, 9.8 cells
+// above its focus; 0.20 on sine at grid 64). Closer to the focus it grows (0.58 at 4.9 cells).
+constexpr double kTransportClaim = 0.6;
+constexpr double kResolveCells = 8.0;
 
 std::string format(const char* fmt, double a, double b = 0.0, double c = 0.0, double d = 0.0) {
     char buf[256];
@@ -246,15 +249,24 @@ AccuracyClaim EikonalFmm::accuracy_claim(const FrameGeometry& frame) const {
                                                  o.bounds.hi.z - o.bounds.lo.z));
         deepest = std::max(deepest, surface_z_ - o.bounds.lo.z);
     }
-    // The grid must resolve the front before the receiver: the focus lies more than two cells below it
-    // (cells within two cells of a focus are counted past_first_focus, Laplacian < -1 / (2 h)).
+    // The grid must resolve the converging front above the receiver. Near a focus its curvature
+    // concentrates in a band narrower than a cell (the discrete Laplacian saturates), so the transport
+    // is claimed only where the first focus lies kResolveCells cells or more below the deepest receiver.
     const double h = texture_.shape.spacing;
-    if (deepest > focus.first_focus_depth - 2.0 * h)
-        return AccuracyClaim::outside(format("the receiver lies %.3g m below the water, past (or within two %.3g m cells of) "
-                                             "the first focus at %.3g m (surface curvature up to %.3g 1/m, ior %.3g): "
-                                             "first-arrival times no longer describe the light",
-                                             deepest, h, focus.first_focus_depth, focus.max_curvature) +
-                                      format(" (ior %.3g)", ior_));
+    const double gap = focus.first_focus_depth - deepest;
+    if (gap < kResolveCells * h) {
+        if (gap <= 0.0)
+            return AccuracyClaim::outside(
+                format("the receiver lies %.3g m below the water, past the first focus at %.3g m (surface curvature up "
+                       "to %.3g 1/m, ior %.3g): first-arrival times no longer describe the light",
+                       deepest, focus.first_focus_depth, focus.max_curvature, ior_));
+        return AccuracyClaim::outside(
+            format("the receiver lies %.3g m below the water, %.3g cells above the first focus at %.3g m ", deepest,
+                   gap / h, focus.first_focus_depth) +
+            format("(cell %.3g m, ior %.3g): the grid resolves the converging front only %.0f cells or more above its "
+                   "focus",
+                   h, ior_, kResolveCells));
+    }
     return AccuracyClaim::within(kTransportClaim);
 }
 
@@ -278,7 +290,9 @@ MethodInfo eikonal_fmm_info() {
          "time the front leaves the interface: plane_wave (the incident plane wave's arrival time (d . p) / n, "
          "so rays refract by Snell's law) or paper (0 everywhere: infinite index, rays along the normals)"},
         {"grid", ParamType::Int, "128", 4, 1024, {},
-         "3-D texture: cells along the longer horizontal side of the water volume; z at the same spacing"},
+         "3-D texture: cells along the longer horizontal side of the receivers' footprint (init_time=plane_wave; "
+         "the volume reaches up the refracted rays to where their light enters) or of the water volume "
+         "(init_time=paper); z at the same spacing"},
         {"iterations", ParamType::Int, "0", 0, 10000, {},
          "viscosity post-process (Sec. 3.3): xy dissipation steps per layer below threshold_height; 0 = off"},
         {"solver", ParamType::Enum, "fmm", 0, 0, {"fmm", "sweep"},
