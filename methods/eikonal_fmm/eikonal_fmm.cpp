@@ -129,7 +129,9 @@ public:
             in.ior = ior_;
             in.fresnel = scene.fresnel;
             in.absorption = water->object->material.absorption;
-            in.first_focus_depth = eikonal::analyze_focus(hf, light, ior_, surface_z_).first_focus_depth;
+            focus_map_ = eikonal::focus_depth_map(hf, light, ior_, surface_z_);
+            in.focus_map = &focus_map_;
+            in.spread = eikonal::ray_spread(hf, light, ior_);
             eikonal::TransportStats ts;
             eikonal::transport(phi, texture_, in, transport_out_, ts);
             texture_.data.swap(transport_out_.data);
@@ -203,6 +205,7 @@ private:
     double threshold_height_, embed_margin_;
     bool scaled_ior_, embed_, transport_;
     VolumeF transport_out_;
+    std::vector<double> focus_map_;  // each interface vertex's focus depth (transport)
     eikonal::Options options_;
     eikonal::Workspace workspace_;  // the eikonal solution; its storage is reused by the next update
 };

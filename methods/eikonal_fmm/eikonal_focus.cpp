@@ -34,16 +34,34 @@ double smallest_positive_root(double a, double b, double c) {
 
 }  // namespace
 
-FocusAnalysis analyze_focus(const HeightField& hf, const glm::dvec3& light_in, double ior, double surface_z) {
+FocusAnalysis analyze_focus(const HeightField& hf, const glm::dvec3& light, double ior, double surface_z) {
     FocusAnalysis out;
+    const std::vector<double> map = focus_depth_map(hf, light, ior, surface_z);
+    for (double d : map) out.first_focus_depth = std::min(out.first_focus_depth, d);
+    const glm::dvec3 l = glm::normalize(light);
+    for (int b = 0; b < hf.ny; ++b)
+        for (int a = 0; a < hf.nx; ++a) {
+            if (glm::dot(l, normal_of(glm::dvec2(hf.grad(a, b)))) >= 0.0) out.shadowed = true;
+            // Convex curvature along x and y (second differences of the height) for the messages.
+            if (a > 0 && a + 1 < hf.nx)
+                out.max_curvature = std::max(out.max_curvature, -(hf.z(a + 1, b) - 2.0 * hf.z(a, b) + hf.z(a - 1, b)) /
+                                                                    (hf.spacing.x * hf.spacing.x));
+            if (b > 0 && b + 1 < hf.ny)
+                out.max_curvature = std::max(out.max_curvature, -(hf.z(a, b + 1) - 2.0 * hf.z(a, b) + hf.z(a, b - 1)) /
+                                                                    (hf.spacing.y * hf.spacing.y));
+        }
+    return out;
+}
+
+std::vector<double> focus_depth_map(const HeightField& hf, const glm::dvec3& light_in, double ior, double surface_z) {
     const glm::dvec3 light = glm::normalize(light_in);
     const int nx = hf.nx, ny = hf.ny;
-    if (nx < 3 || ny < 1) return out;
+    std::vector<double> out(static_cast<std::size_t>(std::max(nx, 0)) * std::max(ny, 0), 1e300);
+    if (nx < 2 || ny < 1) return out;
     std::vector<glm::dvec2> u(static_cast<std::size_t>(nx) * ny);
     for (int b = 0; b < ny; ++b)
         for (int a = 0; a < nx; ++a) {
             const glm::dvec3 n = normal_of(glm::dvec2(hf.grad(a, b)));
-            if (glm::dot(light, n) >= 0.0) out.shadowed = true;
             u[static_cast<std::size_t>(b) * nx + a] = run_of(refract_direction(light, n, ior));
         }
     auto at = [&](int a, int b) { return u[static_cast<std::size_t>(b) * nx + a]; };
@@ -61,14 +79,7 @@ FocusAnalysis analyze_focus(const HeightField& hf, const glm::dvec3& light_in, d
             const double c1 = a00 * b11 + a11 * b00 - a01 * b10 - a10 * b01;
             const double c2 = b00 * b11 - b01 * b10;
             const double d = smallest_positive_root(c0, c1, c2);
-            if (d < 1e299) out.first_focus_depth = std::min(out.first_focus_depth, d + surface_z - hf.z(a, b));
-            // Convex curvature along x and y (second differences of the height) for the messages.
-            if (a > 0 && a + 1 < nx)
-                out.max_curvature = std::max(out.max_curvature, -(hf.z(a + 1, b) - 2.0 * hf.z(a, b) + hf.z(a - 1, b)) /
-                                                                    (hf.spacing.x * hf.spacing.x));
-            if (b > 0 && b + 1 < ny)
-                out.max_curvature = std::max(out.max_curvature, -(hf.z(a, b + 1) - 2.0 * hf.z(a, b) + hf.z(a, b - 1)) /
-                                                                    (hf.spacing.y * hf.spacing.y));
+            if (d < 1e299) out[static_cast<std::size_t>(b) * nx + a] = d + surface_z - hf.z(a, b);
         }
     return out;
 }

@@ -2,6 +2,8 @@
 // Where the first-arrival model of eikonal_fmm stops: the depth of the first focus of the refracted
 // plane wave under a height-field interface (where the Snell map onto a horizontal plane first folds),
 // and the rays' spread about the mean refracted direction. Used by accuracy_claim and the volume.
+#include <vector>
+
 #include <glm/glm.hpp>
 
 #include "heightfield.hpp"
@@ -19,6 +21,9 @@ struct FocusAnalysis {
 // smallest positive root of its determinant (a quadratic in h - z), the local focus. Paraxially, at
 // normal incidence this is n / ((n - 1) kappa) for a crest of curvature kappa.
 FocusAnalysis analyze_focus(const HeightField& hf, const glm::dvec3& light, double ior, double surface_z);
+// The same per interface vertex: the depth below surface_z where the ray entering there focuses
+// (1e300: never), hf.nx x hf.ny values, row-major.
+std::vector<double> focus_depth_map(const HeightField& hf, const glm::dvec3& light, double ior, double surface_z);
 
 // Largest horizontal run per metre of depth between a ray refracted at the steepest slope and the flat
 // interface's ray (the widening of the region the light of a receiver enters through).

@@ -17,6 +17,7 @@ namespace {
 // ln of the smallest intensity kept (an unlit cell), and the largest gain over E0 before a value is
 // clamped (only reachable past a focus, where the Laplacian is already clamped).
 constexpr double kLnFloor = -80.0;
+constexpr double kInfDepth = 1e300;
 constexpr double kLnMaxGain = 20.0;  // e^20: far above any caustic before its focus
 // Layers one semi-Lagrangian step spans: rays are straight in the water, so a step back along the ray
 // over several layers is exact, and each interpolation of ln I (which diffuses it) serves kJump layers.
@@ -31,6 +32,48 @@ glm::dvec3 gradient(const VolumeD& T, int i, int j, int k) {
     };
     return {diff(i, s.nx, [&](int q) { return T.at(q, j, k); }), diff(j, s.ny, [&](int q) { return T.at(i, q, k); }),
             diff(k, s.nz, [&](int q) { return T.at(i, j, q); })};
+}
+
+// Sliding minimum over windows [i - r, i + r] of n values spaced `stride` apart (van Herk / Gil-Werman:
+// prefix and suffix minima over blocks of the window's width; values outside count as +inf).
+void min_filter_1d(const double* in, double* out, int n, std::ptrdiff_t stride, int r, std::vector<double>& pre,
+                   std::vector<double>& suf) {
+    const int w = 2 * r + 1, m = n + 2 * r;
+    pre.assign(static_cast<std::size_t>(m), kInfDepth);
+    suf.assign(static_cast<std::size_t>(m), kInfDepth);
+    auto at = [&](int q) { return q >= r && q < r + n ? in[(q - r) * stride] : kInfDepth; };
+    for (int q = 0; q < m; ++q) pre[q] = q % w == 0 ? at(q) : std::min(pre[q - 1], at(q));
+    for (int q = m - 1; q >= 0; --q) suf[q] = (q % w == w - 1 || q == m - 1) ? at(q) : std::min(suf[q + 1], at(q));
+    for (int i = 0; i < n; ++i) out[i * stride] = std::min(suf[i], pre[i + w - 1]);
+}
+
+// Per column of the volume, the shallowest focus depth of the interface vertices over it (and of the
+// nearest vertex, for height fields coarser than the grid).
+std::vector<double> column_focus(const VolumeShape& s, const HeightField& hf, const std::vector<double>& map) {
+    std::vector<double> g(static_cast<std::size_t>(s.nx) * s.ny, kInfDepth);
+    auto column = [&](double x, double y, int& i, int& j) {
+        i = static_cast<int>(std::floor((x - s.origin.x) / s.spacing));
+        j = static_cast<int>(std::floor((y - s.origin.y) / s.spacing));
+        return i >= 0 && j >= 0 && i < s.nx && j < s.ny;
+    };
+    for (int b = 0; b < hf.ny; ++b)
+        for (int a = 0; a < hf.nx; ++a) {
+            int i, j;
+            if (column(hf.origin.x + a * hf.spacing.x, hf.origin.y + b * hf.spacing.y, i, j)) {
+                double& v = g[static_cast<std::size_t>(j) * s.nx + i];
+                v = std::min(v, map[static_cast<std::size_t>(b) * hf.nx + a]);
+            }
+        }
+    for (int j = 0; j < s.ny; ++j)
+        for (int i = 0; i < s.nx; ++i) {
+            const glm::dvec3 p = s.center(i, j, 0);
+            const int a = static_cast<int>(std::lround((p.x - hf.origin.x) / hf.spacing.x));
+            const int b = static_cast<int>(std::lround((p.y - hf.origin.y) / hf.spacing.y));
+            if (a < 0 || b < 0 || a >= hf.nx || b >= hf.ny) continue;
+            double& v = g[static_cast<std::size_t>(j) * s.nx + i];
+            v = std::min(v, map[static_cast<std::size_t>(b) * hf.nx + a]);
+        }
+    return g;
 }
 
 }  // namespace
@@ -106,7 +149,42 @@ void transport(const VolumeD& T, const VolumeF& lap, const TransportInput& in, V
                wy * ((1 - wx) * lap.at(i0, j1, k) + wx * lap.at(i1, j1, k));
     };
 
+    // Past-focus flags of one layer (with focus_map): the column minimum of the vertex focus depths,
+    // min-filtered over the window the layer's light can enter through, moved down the mean ray.
+    std::vector<double> col_focus, filtered, rowpass;
+    if (in.focus_map) {
+        col_focus = column_focus(s, hf, *in.focus_map);
+        filtered.resize(col_focus.size());
+        rowpass.resize(col_focus.size());
+    }
+    const double shallowest = in.focus_map ? *std::min_element(col_focus.begin(), col_focus.end()) : in.first_focus_depth;
+    const glm::dvec2 run = glm::dvec2(flat.direction) / std::max(-flat.direction.z, 1e-6);
+    std::vector<std::uint8_t> layer_past(static_cast<std::size_t>(s.nx) * s.ny, 0);
+    auto flag_layer = [&](int k) {
+        const double depth = surface_z - s.center(0, 0, k).z;
+        std::fill(layer_past.begin(), layer_past.end(), std::uint8_t(depth >= shallowest));
+        if (!in.focus_map || depth < shallowest) return;
+        const int r = static_cast<int>(std::ceil((in.spread * depth + h) / h));
+        tbb::parallel_for(0, s.ny, [&](int j) {
+            std::vector<double> pre, suf;
+            const std::size_t row = static_cast<std::size_t>(j) * s.nx;
+            min_filter_1d(&col_focus[row], &rowpass[row], s.nx, 1, r, pre, suf);
+        });
+        tbb::parallel_for(0, s.nx, [&](int i) {
+            std::vector<double> pre, suf;
+            min_filter_1d(&rowpass[i], &filtered[i], s.ny, s.nx, r, pre, suf);
+        });
+        const int sx = static_cast<int>(std::lround(run.x * depth / h)), sy = static_cast<int>(std::lround(run.y * depth / h));
+        tbb::parallel_for(0, s.ny, [&](int j) {
+            for (int i = 0; i < s.nx; ++i) {
+                const int fi = std::clamp(i - sx, 0, s.nx - 1), fj = std::clamp(j - sy, 0, s.ny - 1);
+                layer_past[static_cast<std::size_t>(j) * s.nx + i] = filtered[static_cast<std::size_t>(fj) * s.nx + fi] <= depth;
+            }
+        });
+    };
+
     for (int k = s.nz - 1; k >= 0; --k) {
+        flag_layer(k);
         tbb::parallel_for(0, s.ny, [&](int j) {
             for (int i = 0; i < s.nx; ++i) {
                 const std::size_t c = s.index(i, j, k);
@@ -118,7 +196,7 @@ void transport(const VolumeD& T, const VolumeF& lap, const TransportInput& in, V
                 // times no longer describe the light: the discrete front rounds the focus off (its
                 // Laplacian saturates near -0.06 / h on the sine scenes instead of diverging), so the
                 // depth comes from the surface (eikonal_focus.hpp), not from the Laplacian.
-                const bool at_focus = surface_z - p.z >= in.first_focus_depth;
+                const bool at_focus = layer_past[static_cast<std::size_t>(j) * s.nx + i] != 0;
                 glm::dvec3 t = gradient(T, i, j, k);
                 const double len = glm::length(t);
                 if (!(len > 0.0) || t.z / len > -0.2) {

@@ -6,6 +6,7 @@
 // approximates (the intensity law of the eikonal equation: div(I grad T) = -Ka I). Exposed for the
 // tests; the plugin is eikonal_fmm.cpp.
 #include <cstdint>
+#include <vector>
 
 #include <glm/glm.hpp>
 
@@ -23,6 +24,12 @@ struct TransportInput {
     double absorption = 0.0;            // Ka [1/m] in the water
     // Depth below the interface's mean height of the first focus (eikonal_focus.hpp); 1e300: none.
     double first_focus_depth = 1e300;
+    // Optional, finer: each interface vertex's focus depth (focus_depth_map, hf.nx x hf.ny) and the rays'
+    // spread about the mean refracted direction (ray_spread). A cell at depth D is then past the first
+    // focus only if a ray that can reach it (entering within spread D of the mean ray through it) has
+    // focused above it, so a steep ripple does not end the model under the whole surface.
+    const std::vector<double>* focus_map = nullptr;
+    double spread = 0.0;
 };
 
 struct TransportStats {
@@ -36,7 +43,7 @@ struct TransportStats {
 // Near the interface (within two cells) I is set from flux conservation across it, along the exact
 // refracted ray: E0 cos_i T_fresnel dA = I cos_t dA. Below, each cell traces its (straight) ray back
 // up to 8 layers (semi-Lagrangian), interpolates ln I there and integrates -Laplacian T - Ka over the
-// step. Cells deeper than the first focus are past it: first-arrival times no longer describe the
+// step. Cells deeper than the first focus (of the rays that can reach them, with focus_map) are past it: first-arrival times no longer describe the
 // light there (rays have crossed; the first-arrival front has kinks that swallow them). They are
 // counted and hold the flat interface's transmitted irradiance (with absorption along the mean
 // refracted ray), what the light averages to, so the values stay bounded and the flux close.
