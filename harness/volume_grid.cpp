@@ -323,4 +323,55 @@ VolumeShape caustic_volume(const FrameGeometry& frame, const ObjectInstance& wat
     return s;
 }
 
+VolumeShape caustic_volume_along(const FrameGeometry& frame, const ObjectInstance& water, int grid,
+                                 const glm::dvec3& refracted, double spread, double margin_fraction) {
+    const HeightField& hf = *water.heightfield;
+    const glm::dvec2 rect_lo = hf.origin, rect_hi = hf.origin + hf.extent();
+    double hmin = 1e300, hmax = -1e300;
+    for (float z : hf.height) {
+        hmin = std::min(hmin, double(z));
+        hmax = std::max(hmax, double(z));
+    }
+    // Horizontal run of a ray per metre of depth.
+    const glm::dvec2 run = glm::dvec2(refracted) / std::max(-refracted.z, 1e-6);
+    glm::dvec2 lo(1e300), hi(-1e300);
+    double zmin = 1e300;
+    for (const ObjectInstance& o : frame.objects) {
+        if (!o.object || o.object->material.type != MaterialType::Diffuse || !o.bounds.valid()) continue;
+        if (o.bounds.lo.z >= hmax) continue;
+        const glm::dvec2 shift = run * (hmax - o.bounds.lo.z);
+        const glm::dvec2 blo = glm::max(glm::dvec2(o.bounds.lo), rect_lo + glm::min(shift, glm::dvec2(0.0)));
+        const glm::dvec2 bhi = glm::min(glm::dvec2(o.bounds.hi), rect_hi + glm::max(shift, glm::dvec2(0.0)));
+        if (blo.x > bhi.x || blo.y > bhi.y) continue;
+        lo = glm::min(lo, blo);
+        hi = glm::max(hi, bhi);
+        zmin = std::min(zmin, o.bounds.lo.z);
+    }
+    if (lo.x > hi.x) return caustic_volume(frame, water, grid, margin_fraction);
+    const glm::dvec2 footprint = hi - lo;
+    double longest = std::max(footprint.x, footprint.y);
+    if (!(longest > 0.0)) longest = std::max(std::max(hf.extent().x, hf.extent().y), 1e-3);
+    // Where the receivers' light enters: the footprint moved back up the rays over the depth.
+    const double depth = hmax - zmin;
+    const glm::dvec2 back = run * depth, widen(spread * depth);
+    const glm::dvec2 elo = glm::max(lo - glm::max(back, glm::dvec2(0.0)) - widen, rect_lo);
+    const glm::dvec2 ehi = glm::min(hi - glm::min(back, glm::dvec2(0.0)) + widen, rect_hi);
+    if (elo.x <= ehi.x && elo.y <= ehi.y) {
+        lo = glm::min(lo, elo);
+        hi = glm::max(hi, ehi);
+    }
+    lo -= margin_fraction * footprint;
+    hi += margin_fraction * footprint;
+    const glm::dvec2 ext = hi - lo;
+    VolumeShape s;
+    s.spacing = longest * (1.0 + 2.0 * margin_fraction) / std::max(grid, 1);
+    s.nx = std::max(1, static_cast<int>(std::ceil(ext.x / s.spacing - 1e-6)));
+    s.ny = std::max(1, static_cast<int>(std::ceil(ext.y / s.spacing - 1e-6)));
+    const double top = hmax + s.spacing, bottom = zmin - s.spacing;
+    s.nz = std::max(2, static_cast<int>(std::ceil((top - bottom) / s.spacing - 1e-6)));
+    const glm::dvec2 mid = 0.5 * (lo + hi);
+    s.origin = glm::dvec3(mid.x - 0.5 * s.nx * s.spacing, mid.y - 0.5 * s.ny * s.spacing, top - s.nz * s.spacing);
+    return s;
+}
+
 }  // namespace caustics

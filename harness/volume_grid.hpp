@@ -112,5 +112,15 @@ double signed_distance_to_interface(const HeightField& hf, const glm::dvec3& p);
 // horizontal side; z at the same spacing.
 VolumeShape caustic_volume(const FrameGeometry& frame, const ObjectInstance& water, int grid,
                            double margin_fraction = 0.0);
+// The caustic volume for light refracted along `refracted` (unit, downward; oblique light): horizontally
+// the diffuse receivers' footprint where light can reach it through the water's rectangle (the
+// rectangle moved along the rays down to the receivers' depth, so receivers past the water's edge
+// downstream are inside), together with the part of the rectangle the light they receive enters
+// through (the footprint moved back up the rays, widened by `spread` times the depth for the rays'
+// spread about `refracted`), so fronts reach every receiver from the interface rather than from a
+// side face. Spacing: `grid` cells along the longer side of the receivers' footprint (grown by
+// `margin_fraction` on each side); vertically as caustic_volume.
+VolumeShape caustic_volume_along(const FrameGeometry& frame, const ObjectInstance& water, int grid,
+                                 const glm::dvec3& refracted, double spread, double margin_fraction = 0.0);
 
 }  // namespace caustics

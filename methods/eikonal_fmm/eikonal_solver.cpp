@@ -13,6 +13,44 @@
 #include <tbb/parallel_reduce.h>
 
 namespace caustics::eikonal {
+
+glm::dvec3 refract_direction(const glm::dvec3& light, const glm::dvec3& normal, double ior) {
+    // t = eta d + (eta cos_i - cos_t) N, eta = 1 / n (air to water: never total internal reflection).
+    const double eta = 1.0 / ior, cos_i = std::max(0.0, -glm::dot(light, normal));
+    const double cos_t = std::sqrt(std::max(0.0, 1.0 - eta * eta * (1.0 - cos_i * cos_i)));
+    return glm::normalize(eta * light + (eta * cos_i - cos_t) * normal);
+}
+
+Refraction refract_at(const HeightField& hf, double x, double y, const glm::dvec3& light, double ior) {
+    Refraction r;
+    glm::dvec2 g;
+    r.point = glm::dvec3(x, y, extended_height(hf, x, y, &g));
+    r.normal = glm::normalize(glm::dvec3(-g.x, -g.y, 1.0));
+    const double cos_i = -glm::dot(light, r.normal);
+    r.lit = cos_i > 0.0;
+    r.direction = refract_direction(light, r.normal, ior);
+    r.cos_i = std::max(0.0, cos_i);
+    r.cos_t = std::max(0.0, -glm::dot(r.direction, r.normal));
+    return r;
+}
+
+double refracted_foot(const HeightField& hf, const glm::dvec3& p, const glm::dvec3& light, double ior, Refraction& r) {
+    // q.xy = p.xy - s t.xy(q) with s = (p.z - h(q)) / t.z(q): start below p and iterate. Each step
+    // moves q by at most the horizontal run of the ray over the vertical gap, so it stays local.
+    glm::dvec2 q(p.x, p.y);
+    r = refract_at(hf, q.x, q.y, light, ior);
+    const double tol = 1e-6 * std::min(hf.spacing.x, hf.spacing.y);
+    for (int it = 0; it < 12; ++it) {
+        const double s = (p.z - r.point.z) / r.direction.z;
+        const glm::dvec2 next = glm::dvec2(p.x, p.y) - s * glm::dvec2(r.direction);
+        const bool done = glm::length(next - q) < tol;
+        q = next;
+        r = refract_at(hf, q.x, q.y, light, ior);
+        if (done) break;
+    }
+    return (p.z - r.point.z) / r.direction.z;
+}
+
 namespace {
 
 using detail::AxisTerm;
@@ -135,18 +173,28 @@ namespace {
 // costs that make the face's solution match an interface extended linearly past the face, and freeze
 // them for the 3-D solve. On a face normal to axis a the front moves within the face with slowness
 // |grad phi projected on the face| = sqrt(1 - n_a^2) (n: unit interface normal); on a vertical edge
-// with slowness |n_z| (the paper's alpha = 1 / cos theta as a speed).
-void paper_boundary(Field& f, const std::vector<glm::dvec2>& column_gradient, int order, Stats& stats) {
+// with slowness |n_z| (the paper's alpha = 1 / cos theta as a speed). With the plane-wave start the
+// rays leave the interface along the refracted direction t instead of n: `column_ray` holds n or t.
+// Oblique light leaves the volume through its downstream faces: there the light comes from inside,
+// which the 3-D solve gets right, so a face (and its edges) is treated only where the mean ray `mean`
+// does not leave through it (for the paper's fronts, mean is vertical: every face is treated).
+void paper_boundary(Field& f, const std::vector<glm::dvec3>& column_ray, const glm::dvec3& mean, int order,
+                    Stats& stats) {
     const VolumeShape& s = f.shape;
     const double h = s.spacing;
-    auto normal = [&](int i, int j) {
-        const glm::dvec2 g = column_gradient[static_cast<std::size_t>(j) * s.nx + i];
-        return glm::normalize(glm::dvec3(-g.x, -g.y, 1.0));
+    auto normal = [&](int i, int j) { return column_ray[static_cast<std::size_t>(j) * s.nx + i]; };
+    constexpr double kLeaving = 1e-3;  // |t_a| below this: rays run along the face (the paper's case)
+    // Whether the face normal to `axis` at `side` is one the light leaves through.
+    auto outflow = [&](int axis, int side, int n_axis) {
+        const double ta = axis == 0 ? mean.x : mean.y;
+        if (n_axis == 1) return false;
+        return side == 0 ? ta < -kLeaving : ta > kLeaving;
     };
     // 1-D boundaries: the four vertical edges.
     for (int j : {0, s.ny - 1})
         for (int i : {0, s.nx - 1}) {
             if ((i == s.nx - 1 && i != 0 && s.nx == 1) || (j == s.ny - 1 && j != 0 && s.ny == 1)) continue;
+            if (outflow(0, i, s.nx) || outflow(1, j, s.ny)) continue;
             const double fz = std::fabs(normal(i, j).z);
             int k = s.nz - 1;
             while (k >= 0 && f.frozen[s.index(i, j, k)]) --k;
@@ -167,7 +215,7 @@ void paper_boundary(Field& f, const std::vector<glm::dvec2>& column_gradient, in
     for (int axis = 0; axis < 2; ++axis) {
         const int n_axis = axis == 0 ? s.nx : s.ny;
         for (int side : {0, n_axis - 1})
-            if (side == 0 || n_axis > 1) faces.push_back({axis, side});
+            if ((side == 0 || n_axis > 1) && !outflow(axis, side, n_axis)) faces.push_back({axis, side});
     }
     std::vector<Field> solved(faces.size());
     std::vector<Stats> face_stats(faces.size());
@@ -255,6 +303,26 @@ const VolumeD& solve(const HeightField& hf, const VolumeShape& shape, const Opti
     });
     const double band = 2.0 * h;
     const bool triangle = options.init == Init::Triangle;
+    const bool plane_wave = options.init_time == InitTime::PlaneWave;
+    const glm::dvec3 light = glm::normalize(options.light);
+    // The direction rays leave each column's interface point: the normal (paper) or the refracted
+    // plane wave; with the plane wave also its arrival time there.
+    std::vector<glm::dvec3> column_ray(column_height.size());
+    std::vector<double> column_time(column_height.size(), 0.0);
+    tbb::parallel_for(0, s.ny, [&](int j) {
+        for (int i = 0; i < s.nx; ++i) {
+            const std::size_t col = static_cast<std::size_t>(j) * s.nx + i;
+            const glm::dvec2 g = column_gradient[col];
+            if (plane_wave) {
+                const glm::dvec3 p = s.center(i, j, 0);
+                const Refraction r = refract_at(hf, p.x, p.y, light, options.ior);
+                column_ray[col] = r.direction;
+                column_time[col] = plane_wave_time(r.point, light, options.ior);
+            } else {
+                column_ray[col] = glm::normalize(glm::dvec3(-g.x, -g.y, 1.0));
+            }
+        }
+    });
     // Parallel over rows, not layers: the band of exact distances spans only a few layers.
     tbb::parallel_for(0, s.nz * s.ny, [&](int row) {
         const int k = row / s.ny, j = row % s.ny;
@@ -265,12 +333,21 @@ const VolumeD& solve(const HeightField& hf, const VolumeShape& shape, const Opti
             const double gap = z - column_height[col];
             const double estimate = -gap * column_slope[col];  // > 0 below
             if (triangle && std::fabs(estimate) <= band) {
-                f.phi[c] = signed_distance_to_interface(hf, s.center(i, j, k));
+                if (plane_wave) {
+                    // The exact arrival time along the refracted ray through the cell centre (extended
+                    // above the interface so the Laplacian is smooth across it).
+                    Refraction r;
+                    const double run = refracted_foot(hf, s.center(i, j, k), light, options.ior, r);
+                    f.phi[c] = plane_wave_time(r.point, light, options.ior) + run;
+                } else {
+                    f.phi[c] = signed_distance_to_interface(hf, s.center(i, j, k));
+                }
                 f.frozen[c] = 1;
             } else if (gap > 0.0) {
                 // Air above the interface: frozen (light enters from the interface only), with an
-                // approximate signed distance so the Laplacian is smooth across the interface.
-                f.phi[c] = estimate;
+                // approximate value so the Laplacian is smooth across the interface: the signed
+                // distance (paper), or the column's arrival time continued up its refracted ray.
+                f.phi[c] = plane_wave ? column_time[col] + gap / column_ray[col].z : estimate;
                 f.frozen[c] = 1;
             } else {
                 f.phi[c] = kInf;
@@ -280,6 +357,7 @@ const VolumeD& solve(const HeightField& hf, const VolumeShape& shape, const Opti
     });
     if (options.init == Init::Vertex) {
         // Mercier 2013, Algorithm 1: each interface vertex sets its cell to its distance to the centre.
+        std::vector<std::uint8_t> vertex_set(plane_wave ? s.size() : 0);
         for (int b = 0; b < hf.ny; ++b)
             for (int a = 0; a < hf.nx; ++a) {
                 const glm::dvec3 v(hf.origin.x + a * hf.spacing.x, hf.origin.y + b * hf.spacing.y, hf.z(a, b));
@@ -288,7 +366,16 @@ const VolumeD& solve(const HeightField& hf, const VolumeShape& shape, const Opti
                           k = static_cast<int>(std::floor(g.z));
                 if (i < 0 || j < 0 || k < 0 || i >= s.nx || j >= s.ny || k >= s.nz) continue;
                 const std::size_t c = s.index(i, j, k);
-                const double d = glm::length(v - s.center(i, j, k));
+                double d = glm::length(v - s.center(i, j, k));
+                if (plane_wave) {
+                    // The vertex's arrival time continued along its refracted ray to the centre.
+                    const Refraction r = refract_at(hf, v.x, v.y, light, options.ior);
+                    d = plane_wave_time(v, light, options.ior) + glm::dot(r.direction, s.center(i, j, k) - v);
+                    f.phi[c] = vertex_set[c] ? std::min(f.phi[c], d) : d;
+                    vertex_set[c] = 1;
+                    f.frozen[c] = 1;
+                    continue;
+                }
                 if (!f.frozen[c] || f.phi[c] < 0.0) f.phi[c] = d;  // air estimate replaced by the vertex
                 else f.phi[c] = std::min(f.phi[c], d);
                 f.frozen[c] = 1;
@@ -297,7 +384,8 @@ const VolumeD& solve(const HeightField& hf, const VolumeShape& shape, const Opti
     stats.init_ms += ms_since(t0);
     if (options.boundary == Boundary::Paper) {
         t0 = std::chrono::steady_clock::now();
-        paper_boundary(f, column_gradient, options.order, stats);
+        const glm::dvec3 mean = plane_wave ? refract_direction(light, glm::dvec3(0, 0, 1), options.ior) : glm::dvec3(0, 0, -1);
+        paper_boundary(f, column_ray, mean, options.order, stats);
         stats.boundary_ms += ms_since(t0);
     }
     t0 = std::chrono::steady_clock::now();

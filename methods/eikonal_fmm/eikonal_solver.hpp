@@ -14,13 +14,41 @@ namespace caustics::eikonal {
 enum class Solver { Fmm, Sweep };
 enum class Init { Vertex, Triangle };
 enum class Boundary { None, Paper };  // `embed` is a larger domain, chosen by the caller
+// The time the front leaves each interface point. Paper: 0 everywhere (Sec. 3: the limit of an
+// infinite refractive index, fronts move along the interface normals). PlaneWave: the arrival time of
+// the incident plane wave, (d . q) / n in water path length, so that below the interface grad T is
+// the refracted direction of Snell's law (its tangential part is that of d / n).
+enum class InitTime { Paper, PlaneWave };
 
 struct Options {
     Solver solver = Solver::Fmm;
     int order = 2;
     Init init = Init::Triangle;
     Boundary boundary = Boundary::Paper;
+    InitTime init_time = InitTime::PlaneWave;
+    glm::dvec3 light{0.0, 0.0, -1.0};  // PlaneWave: the direction the incident light travels (unit)
+    double ior = 1.33;                 // PlaneWave: the water's index (the outside is air, n = 1)
 };
+
+// The incident plane wave refracted at the (extended) interface point over (x, y).
+struct Refraction {
+    glm::dvec3 point{0.0};             // q on the interface
+    glm::dvec3 normal{0.0, 0.0, 1.0};  // unit, upward
+    glm::dvec3 direction{0.0, 0.0, -1.0};  // refracted ray t (unit, downward)
+    double cos_i = 1.0, cos_t = 1.0;   // -d . N and -t . N
+    bool lit = true;                   // false where the light meets the interface from below (shadowed)
+};
+Refraction refract_at(const HeightField& hf, double x, double y, const glm::dvec3& light, double ior);
+// Snell's law for a unit upward normal (cos_i clamped at 0 for grazing / back-facing light).
+glm::dvec3 refract_direction(const glm::dvec3& light, const glm::dvec3& normal, double ior);
+// The refracted ray of the plane wave through p: the interface point q with p = q + s t(q) (a
+// fixed-point iteration on the entry point; exact for any surface before the rays cross). Returns s,
+// > 0 below the interface, < 0 above; r receives q's refraction.
+double refracted_foot(const HeightField& hf, const glm::dvec3& p, const glm::dvec3& light, double ior, Refraction& r);
+// The plane wave's arrival time at interface point q in water path length: (d . q) / n.
+inline double plane_wave_time(const glm::dvec3& q, const glm::dvec3& light, double ior) {
+    return (light.x * q.x + light.y * q.y + light.z * q.z) / ior;
+}
 
 struct Stats {
     std::int64_t not_converged = 0;   // sweep layers that hit the pass limit; cells never reached

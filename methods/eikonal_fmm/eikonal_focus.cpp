@@ -1,0 +1,99 @@
+// First focus of the refracted plane wave under a height field (see eikonal_focus.hpp).
+#include "eikonal_focus.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "eikonal_solver.hpp"
+
+namespace caustics::eikonal {
+namespace {
+
+glm::dvec3 normal_of(const glm::dvec2& g) { return glm::normalize(glm::dvec3(-g.x, -g.y, 1.0)); }
+
+glm::dvec2 run_of(const glm::dvec3& t) { return glm::dvec2(t) / std::max(-t.z, 1e-9); }
+
+// Smallest positive root of a + b x + c x^2 (1e300 if none).
+double smallest_positive_root(double a, double b, double c) {
+    double best = 1e300;
+    auto take = [&](double x) {
+        if (x > 0.0 && x < best) best = x;
+    };
+    if (std::fabs(c) < 1e-12 * (std::fabs(a) + std::fabs(b))) {
+        if (b != 0.0) take(-a / b);
+        return best;
+    }
+    const double disc = b * b - 4.0 * a * c;
+    if (disc < 0.0) return best;
+    const double r = std::sqrt(disc);
+    take((-b - r) / (2.0 * c));
+    take((-b + r) / (2.0 * c));
+    return best;
+}
+
+}  // namespace
+
+FocusAnalysis analyze_focus(const HeightField& hf, const glm::dvec3& light, double ior, double surface_z) {
+    FocusAnalysis out;
+    const std::vector<double> map = focus_depth_map(hf, light, ior, surface_z);
+    for (double d : map) out.first_focus_depth = std::min(out.first_focus_depth, d);
+    const glm::dvec3 l = glm::normalize(light);
+    for (int b = 0; b < hf.ny; ++b)
+        for (int a = 0; a < hf.nx; ++a) {
+            if (glm::dot(l, normal_of(glm::dvec2(hf.grad(a, b)))) >= 0.0) out.shadowed = true;
+            // Convex curvature along x and y (second differences of the height) for the messages.
+            if (a > 0 && a + 1 < hf.nx)
+                out.max_curvature = std::max(out.max_curvature, -(hf.z(a + 1, b) - 2.0 * hf.z(a, b) + hf.z(a - 1, b)) /
+                                                                    (hf.spacing.x * hf.spacing.x));
+            if (b > 0 && b + 1 < hf.ny)
+                out.max_curvature = std::max(out.max_curvature, -(hf.z(a, b + 1) - 2.0 * hf.z(a, b) + hf.z(a, b - 1)) /
+                                                                    (hf.spacing.y * hf.spacing.y));
+        }
+    return out;
+}
+
+std::vector<double> focus_depth_map(const HeightField& hf, const glm::dvec3& light_in, double ior, double surface_z) {
+    const glm::dvec3 light = glm::normalize(light_in);
+    const int nx = hf.nx, ny = hf.ny;
+    std::vector<double> out(static_cast<std::size_t>(std::max(nx, 0)) * std::max(ny, 0), 1e300);
+    if (nx < 2 || ny < 1) return out;
+    std::vector<glm::dvec2> u(static_cast<std::size_t>(nx) * ny);
+    for (int b = 0; b < ny; ++b)
+        for (int a = 0; a < nx; ++a) {
+            const glm::dvec3 n = normal_of(glm::dvec2(hf.grad(a, b)));
+            u[static_cast<std::size_t>(b) * nx + a] = run_of(refract_direction(light, n, ior));
+        }
+    auto at = [&](int a, int b) { return u[static_cast<std::size_t>(b) * nx + a]; };
+    for (int b = 0; b < ny; ++b)
+        for (int a = 0; a < nx; ++a) {
+            const int a0 = std::max(a - 1, 0), a1 = std::min(a + 1, nx - 1);
+            const int b0 = std::max(b - 1, 0), b1 = std::min(b + 1, ny - 1);
+            const glm::dvec2 dudx = a1 > a0 ? (at(a1, b) - at(a0, b)) / ((a1 - a0) * hf.spacing.x) : glm::dvec2(0.0);
+            const glm::dvec2 dudy = b1 > b0 ? (at(a, b1) - at(a, b0)) / ((b1 - b0) * hf.spacing.y) : glm::dvec2(0.0);
+            const glm::dvec2 g(hf.grad(a, b)), uu = at(a, b);
+            // A = I + u g^T, B = grad u (columns d/dx, d/dy).
+            const double a00 = 1.0 + uu.x * g.x, a01 = uu.x * g.y, a10 = uu.y * g.x, a11 = 1.0 + uu.y * g.y;
+            const double b00 = dudx.x, b01 = dudy.x, b10 = dudx.y, b11 = dudy.y;
+            const double c0 = a00 * a11 - a01 * a10;
+            const double c1 = a00 * b11 + a11 * b00 - a01 * b10 - a10 * b01;
+            const double c2 = b00 * b11 - b01 * b10;
+            const double d = smallest_positive_root(c0, c1, c2);
+            if (d < 1e299) out[static_cast<std::size_t>(b) * nx + a] = d + surface_z - hf.z(a, b);
+        }
+    return out;
+}
+
+double ray_spread(const HeightField& hf, const glm::dvec3& light_in, double ior) {
+    const glm::dvec3 light = glm::normalize(light_in);
+    double gmax = 0.0;
+    for (int b = 0; b < hf.ny; ++b)
+        for (int a = 0; a < hf.nx; ++a) gmax = std::max(gmax, static_cast<double>(glm::length(hf.grad(a, b))));
+    const glm::dvec2 mean = run_of(refract_direction(light, glm::dvec3(0, 0, 1), ior));
+    double spread = 0.0;
+    for (const glm::dvec2 g : {glm::dvec2(gmax, 0), glm::dvec2(-gmax, 0), glm::dvec2(0, gmax), glm::dvec2(0, -gmax)})
+        spread = std::max(spread, glm::length(run_of(refract_direction(light, normal_of(g), ior)) - mean));
+    return spread;
+}
+
+}  // namespace caustics::eikonal
