@@ -18,6 +18,13 @@ inline int wrap(int i, int n) {
     return i >= n ? i - n : i;
 }
 
+// Periodic index for any i (the crossing offsets are a few cells; a steep surface may have more).
+inline int wrap_far(int i, int n) {
+    if (i >= 0 && i < n) return i;
+    i %= n;
+    return i < 0 ? i + n : i;
+}
+
 }  // namespace
 
 double fresnel_transmittance(double ci, double n) {
@@ -103,32 +110,46 @@ void build_refracted_screen(const float* height, const RefractionSetup& s, Refra
     // water; two more steps leave ~1e-3 of the offset, a few micrometres).
     out.path.resize(cells);
     out.amplitude.resize(cells);
-    auto at = [&](int a, int b) -> const Sample& { return samples[static_cast<std::size_t>(b) * nx + a]; };
+    const int ishift = 4 * std::max(nx, ny);
+    const float shift = static_cast<float>(ishift);
     tbb::parallel_for(tbb::blocked_range<int>(0, ny, 16), [&](const tbb::blocked_range<int>& r) {
         for (int j = r.begin(); j < r.end(); ++j)
             for (int i = 0; i < nx; ++i) {
-                const Sample& self = at(i, j);
+                const Sample& self = samples[static_cast<std::size_t>(j) * nx + i];
                 float x = static_cast<float>(i) - self.dx, y = static_cast<float>(j) - self.dy;
-                Sample v{};
-                for (int it = 0; it < 3; ++it) {
-                    const float fx = std::floor(x), fy = std::floor(y);
-                    const float ax = x - fx, ay = y - fy;
-                    const int x0 = wrap(static_cast<int>(fx), nx), x1 = wrap(x0 + 1, nx);
-                    const int y0 = wrap(static_cast<int>(fy), ny), y1 = wrap(y0 + 1, ny);
-                    const Sample &s00 = at(x0, y0), &s10 = at(x1, y0), &s01 = at(x0, y1), &s11 = at(x1, y1);
-                    auto lerp2 = [&](float Sample::*f) {
-                        const float top = s00.*f + ax * (s10.*f - s00.*f);
-                        const float bottom = s01.*f + ax * (s11.*f - s01.*f);
-                        return top + ay * (bottom - top);
-                    };
-                    if (it < 2) {
-                        x = static_cast<float>(i) - lerp2(&Sample::dx);
-                        y = static_cast<float>(j) - lerp2(&Sample::dy);
-                    } else {
-                        v.path = lerp2(&Sample::path);
-                        v.density = lerp2(&Sample::density);
-                    }
+                // Bilinear weights and the four samples around (x, y).
+                const Sample *s00, *s10, *s01, *s11;
+                float ax, ay;
+                auto locate = [&] {
+                    // Floor by truncating a shifted positive value (std::floor is a libm call without
+                    // SSE4.1, and this loop is the screen's main cost).
+                    x = std::max(x, 1.0f - shift);
+                    y = std::max(y, 1.0f - shift);
+                    const int ix = static_cast<int>(x + shift) - ishift;
+                    const int iy = static_cast<int>(y + shift) - ishift;
+                    ax = x - static_cast<float>(ix);
+                    ay = y - static_cast<float>(iy);
+                    const int x0 = wrap_far(ix, nx), x1 = wrap(x0 + 1, nx);
+                    const Sample* r0 = samples.data() + static_cast<std::size_t>(wrap_far(iy, ny)) * nx;
+                    const Sample* r1 = samples.data() + static_cast<std::size_t>(wrap(wrap_far(iy, ny) + 1, ny)) * nx;
+                    s00 = r0 + x0;
+                    s10 = r0 + x1;
+                    s01 = r1 + x0;
+                    s11 = r1 + x1;
+                };
+                auto lerp = [&](float a00, float a10, float a01, float a11) {
+                    const float top = a00 + ax * (a10 - a00), bottom = a01 + ax * (a11 - a01);
+                    return top + ay * (bottom - top);
+                };
+                for (int it = 0; it < 2; ++it) {
+                    locate();
+                    x = static_cast<float>(i) - lerp(s00->dx, s10->dx, s01->dx, s11->dx);
+                    y = static_cast<float>(j) - lerp(s00->dy, s10->dy, s01->dy, s11->dy);
                 }
+                locate();
+                Sample v{};
+                v.path = lerp(s00->path, s10->path, s01->path, s11->path);
+                v.density = lerp(s00->density, s10->density, s01->density, s11->density);
                 const std::size_t k = static_cast<std::size_t>(j) * nx + i;
                 out.path[k] = v.path;
                 out.amplitude[k] = std::sqrt(std::max(0.0f, v.density));

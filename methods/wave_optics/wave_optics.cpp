@@ -161,10 +161,8 @@ std::int64_t refracted_field(const RefractedScreen& screen, int n, double k0, st
         std::int64_t count = 0;
         for (int i = 0; i < n; ++i) {
             const float* P = screen.path.data();
-            double phase = k0 * P[row + i];
-            phase -= 2.0 * std::numbers::pi * std::nearbyint(phase / (2.0 * std::numbers::pi));
             float s, c;
-            fast_sincos(static_cast<float>(phase), s, c);
+            fast_sincos(static_cast<float>(k0 * P[row + i]), s, c);   // |phase| < 1e4, as set_phase_screen's
             const float a = screen.amplitude[row + i];
             field[row + i] = ComplexF(a * c, a * s);
             const int i1 = (i + 1) % n;
@@ -279,8 +277,27 @@ public:
         const ReceiverChart chart(frame, 2, 2);
         double depth = 0.0;
         const double level = mean_level(hf);
+        // A non-periodic surface is tapered over its border band: light entering there (or outside the
+        // surface) is not the scene's. Entry points of the geometric beam, on a 9 x 9 net of the receiver.
+        const double band = check_edges(hf).periodic ? 0.0 : taper_band_width(lx_, ly_);
+        const glm::dvec2 beam_walk = glm::dvec2(refracted_.x, refracted_.y) / std::max(1e-9, -refracted_.z);
+        double margin = 1e300;
         for (int j = 0; j <= 8; ++j)
-            for (int i = 0; i <= 8; ++i) depth = std::max(depth, level - chart.point(i / 8.0, j / 8.0).z);
+            for (int i = 0; i <= 8; ++i) {
+                const glm::dvec3 p = chart.point(i / 8.0, j / 8.0);
+                const double z = level - p.z;
+                depth = std::max(depth, z);
+                const glm::dvec2 rel = glm::dvec2(p) - z * beam_walk - glm::dvec2(hf.origin);
+                margin = std::min({margin, rel.x, rel.y, lx_ - rel.x, ly_ - rel.y});
+            }
+        if (margin < band) {
+            std::ostringstream s;
+            s.precision(3);
+            s << "wave_optics: light reaching the receiver enters " << (margin < 0.0 ? "outside the surface" : "through its border band")
+              << " (" << margin << " m from its edge; the surface does not tile and is tapered over " << band
+              << " m at its edges)";
+            return AccuracyClaim::outside(s.str());
+        }
         const std::string why = regime_violation(regime(hf, depth));
         return why.empty() ? AccuracyClaim::within(kClaimFactor) : AccuracyClaim::outside("wave_optics: " + why);
     }
