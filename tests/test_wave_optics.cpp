@@ -635,6 +635,17 @@ TEST(WaveOptics, AccuracyClaimStatesTheRegime) {
     EXPECT_FALSE(near.claim.inside);
     EXPECT_NE(near.claim.reason.find("diffraction blur"), std::string::npos) << near.claim.reason;
     EXPECT_GT(near.health.get("diffraction_eps_pct"), 100 * wave_optics::kMaxEpsilon);
+    // A surface that does not tile (1.2 m of a 0.25 m sine) lit at 30 degrees: the light reaching the
+    // receiver's upstream edge enters outside it.
+    Scene cut = water_scene(HeightGenerator::Sine, 0.001, -0.4, {0.5, 0.0, -std::sqrt(0.75)}, 32, 1.0);
+    cut.objects[0].heightfield.size = {1.2, 1.2};
+    auto m = make_method({{"grid", "256"}});
+    m->prepare(cut);
+    const FrameGeometry frame = build_frame_geometry(cut, 0);
+    m->update(frame);
+    const AccuracyClaim claim = m->accuracy_claim(frame);
+    EXPECT_FALSE(claim.inside);
+    EXPECT_NE(claim.reason.find("enters outside the surface"), std::string::npos) << claim.reason;
 }
 
 }  // namespace

@@ -42,16 +42,19 @@ SurfaceStats surface_stats(const float* h, int nx, int ny, double dx, double dy,
                 const double hyy = (hp[i] - 2.0 * h0[i] + hm[i]) / (dy * dy);
                 const double hxy = (hp[ip] - hp[im] - hm[ip] + hm[im]) / (4.0 * dx * dy);
                 slope2 = std::max(slope2, gx * gx + gy * gy);
-                curvature = std::max(curvature, std::abs(0.5 * (hxx + hyy)) +
-                                                    std::sqrt(0.25 * (hxx - hyy) * (hxx - hyy) + hxy * hxy));
+                // The square roots only where a bound says the extreme may change (exact either way).
+                const double mean_h = std::abs(0.5 * (hxx + hyy));
+                if (mean_h + 0.5 * std::abs(hxx - hyy) + std::abs(hxy) > curvature)
+                    curvature = std::max(curvature, mean_h + std::sqrt(0.25 * (hxx - hyy) * (hxx - hyy) + hxy * hxy));
                 // Hessian in the tilt frame, scaled by M^1/2 on both sides.
                 const double huu = u.x * u.x * hxx + 2.0 * u.x * u.y * hxy + u.y * u.y * hyy;
                 const double hvv = v.x * v.x * hxx + 2.0 * v.x * v.y * hxy + v.y * v.y * hyy;
                 const double huv = u.x * v.x * hxx + (u.x * v.y + u.y * v.x) * hxy + u.y * v.y * hyy;
                 const double a = mu2 * huu, b = mv2 * hvv, o = muv * huv;
-                const double half_gap = std::sqrt(0.25 * (a - b) * (a - b) + o * o);
                 // Converging where the map's Jacobian 1 + z (c / n) eig falls: the sign of c decides which end.
-                e_min = std::min(e_min, c >= 0.0 ? 0.5 * (a + b) - half_gap : -(0.5 * (a + b) + half_gap));
+                const double centre = c >= 0.0 ? 0.5 * (a + b) : -0.5 * (a + b);
+                if (centre - (0.5 * std::abs(a - b) + std::abs(o)) < e_min)
+                    e_min = std::min(e_min, centre - std::sqrt(0.25 * (a - b) * (a - b) + o * o));
             }
             rows[static_cast<std::size_t>(j)] = {e_min, std::sqrt(slope2), curvature};
         }
