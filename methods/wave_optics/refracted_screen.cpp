@@ -51,6 +51,9 @@ void build_refracted_screen(const float* height, const RefractionSetup& s, Refra
     std::vector<Sample>& samples = out.samples;
     samples.resize(cells);
     std::vector<std::int32_t> unlit(static_cast<std::size_t>(ny), 0), folded(static_cast<std::size_t>(ny), 0);
+    // Reciprocals hoisted out of the per-sample loop (divisions dominate it otherwise).
+    const double ihx = 0.5 / dx, ihy = 0.5 / dy, idx = 1.0 / dx, idy = 1.0 / dy, inv_n = 1.0 / n, inv_n2 = inv_n * inv_n;
+    const double inv_flat = 1.0 / flat;
     const double cos_t0 = std::sqrt(std::max(0.0, 1.0 - (1.0 - cos_i * cos_i) / (n * n)));
     tbb::parallel_for(tbb::blocked_range<int>(0, ny, 16), [&](const tbb::blocked_range<int>& r) {
         for (int j = r.begin(); j < r.end(); ++j) {
@@ -60,7 +63,7 @@ void build_refracted_screen(const float* height, const RefractionSetup& s, Refra
             for (int i = 0; i < nx; ++i) {
                 const std::size_t k = static_cast<std::size_t>(j) * nx + i;
                 const double hk = h0[i];
-                const glm::dvec2 g((h0[wrap(i + 1, nx)] - h0[wrap(i - 1, nx)]) / (2.0 * dx), (hp[i] - hm[i]) / (2.0 * dy));
+                const glm::dvec2 g((h0[wrap(i + 1, nx)] - h0[wrap(i - 1, nx)]) * ihx, (hp[i] - hm[i]) * ihy);
                 const glm::dvec3 m(-g.x, -g.y, 1.0);            // upward normal, |m| = sqrt(1 + |g|^2)
                 const double facing = -glm::dot(d, m);          // cos_i + d_xy . g: intercepted flux per unit area
                 if (!(facing > 0.0)) {                          // the light grazes or hits the back of the slope
@@ -72,14 +75,14 @@ void build_refracted_screen(const float* height, const RefractionSetup& s, Refra
                 const glm::dvec3 nn = m * inv_m;
                 const double ci = facing * inv_m;
                 // Snell in vector form: t = d / n + (ci / n - ct) nn.
-                const double ct = std::sqrt(std::max(0.0, 1.0 - (1.0 - ci * ci) / (n * n)));
-                const glm::dvec3 t = d / n + (ci / n - ct) * nn;
+                const double ct = std::sqrt(std::max(0.0, 1.0 - (1.0 - ci * ci) * inv_n2));
+                const glm::dvec3 t = d * inv_n + (ci * inv_n - ct) * nn;
                 const double inv_tz = 1.0 / std::max(-t.z, 1e-9);
                 const double tr = s.fresnel ? fresnel_transmittance(ci, n) : 1.0;
                 const double absorbed = s.absorption > 0.0 ? std::exp(-s.absorption * hk * inv_tz) : 1.0;
-                samples[k] = {static_cast<float>(hk * t.x * inv_tz / dx), static_cast<float>(hk * t.y * inv_tz / dy),
+                samples[k] = {static_cast<float>(hk * t.x * inv_tz * idx), static_cast<float>(hk * t.y * inv_tz * idy),
                               static_cast<float>(hk * ((n - d.x * t.x - d.y * t.y) * inv_tz - cos_i)),
-                              static_cast<float>(facing * tr * absorbed / flat)};
+                              static_cast<float>(facing * tr * absorbed * inv_flat)};
             }
         }
     });

@@ -26,6 +26,7 @@ SurfaceStats surface_stats(const float* h, int nx, int ny, double dx, double dy,
     const glm::dvec2 v(-u.y, u.x);
     const double mu2 = std::abs(c) / ior / (cos_t * cos_t * cos_t), mv2 = std::abs(c) / ior / cos_t;
     const double muv = std::sqrt(mu2 * mv2);
+    const double ihx = 0.5 / dx, ihy = 0.5 / dy, ixx = 1.0 / (dx * dx), iyy = 1.0 / (dy * dy), ixy = 0.25 / (dx * dy);
     const int lo = periodic ? 0 : 1;
     const int hx = periodic ? nx : nx - 1, hy = periodic ? ny : ny - 1;
     std::vector<SurfaceStats> rows(static_cast<std::size_t>(std::max(ny, 0)));
@@ -37,10 +38,10 @@ SurfaceStats surface_stats(const float* h, int nx, int ny, double dx, double dy,
             double e_min = 0.0, slope2 = 0.0, curvature = 0.0;
             for (int i = lo; i < hx; ++i) {
                 const int im = i == 0 ? nx - 1 : i - 1, ip = i + 1 == nx ? 0 : i + 1;
-                const double gx = (h0[ip] - h0[im]) / (2.0 * dx), gy = (hp[i] - hm[i]) / (2.0 * dy);
-                const double hxx = (h0[ip] - 2.0 * h0[i] + h0[im]) / (dx * dx);
-                const double hyy = (hp[i] - 2.0 * h0[i] + hm[i]) / (dy * dy);
-                const double hxy = (hp[ip] - hp[im] - hm[ip] + hm[im]) / (4.0 * dx * dy);
+                const double gx = (h0[ip] - h0[im]) * ihx, gy = (hp[i] - hm[i]) * ihy;
+                const double hxx = (static_cast<double>(h0[ip]) - 2.0 * h0[i] + h0[im]) * ixx;
+                const double hyy = (static_cast<double>(hp[i]) - 2.0 * h0[i] + hm[i]) * iyy;
+                const double hxy = (static_cast<double>(hp[ip]) - hp[im] - hm[ip] + hm[im]) * ixy;
                 slope2 = std::max(slope2, gx * gx + gy * gy);
                 // The square roots only where a bound says the extreme may change (exact either way).
                 const double mean_h = std::abs(0.5 * (hxx + hyy));

@@ -5,6 +5,7 @@
 // in the Fourier domain. The intensity |u|^2, scaled by the transmitted irradiance, is the caustic
 // irradiance. See wave_propagator.hpp for the propagators and their band limit.
 #include <algorithm>
+#include <cstring>
 #include <cmath>
 #include <memory>
 #include <numbers>
@@ -262,6 +263,7 @@ public:
             for (int c = 0; c < 3; ++c) sp.rgb[c] = rgb_sum[c] > 0.0 ? static_cast<float>(sp.rgb[c] / rgb_sum[c]) : 1.0f / samples_;
         transmittance_ = scene.fresnel ? fresnel_transmittance(cos_i_, n_mid) : 1.0;
         scene_fresnel_ = scene.fresnel;
+        stats_of_ = nullptr;
         light_ = dir;
         screens_.clear();
         screens_used_ = 0;
@@ -269,6 +271,14 @@ public:
     }
 
     CausticOutput render(const FrameGeometry& frame, const RenderRequest& request) override;
+
+    void update(const FrameGeometry& frame) override {
+        const HeightField& hf = *frame.objects.at(static_cast<std::size_t>(water_index_)).heightfield;
+        const double n_mid = spectral_.empty() ? 1.33 : 0.5 * (spectral_.front().n + spectral_.back().n);
+        stats_ = surface_stats(hf, light_, n_mid);
+        stats_of_ = &hf;
+        stats_version_ = hf_version(hf);
+    }
 
     // Inside the geometric-optics regime (regime.hpp) at the deepest receiver point: the error factor
     // measured on the sine cases with margin (README.md); outside: the bound with its numbers.
@@ -312,11 +322,28 @@ private:
     // The regime at `depth` below the mean level, for the longest wavelength propagated.
     // From the height field's vertices (the claim and the health agree; the FFT grid's bilinear
     // resampling would add kinks to the curvature).
+    // The surface's part is computed by update() (it depends on the frame's geometry only, like an
+    // acceleration structure) and kept for the frame's renders and claim; computed here otherwise.
     Regime regime(const HeightField& hf, double depth) const {
         const double n_mid = spectral_.empty() ? 1.33 : 0.5 * (spectral_.front().n + spectral_.back().n);
-        return estimate_regime(surface_stats(hf, light_, n_mid), light_, n_mid,
-                               spectral_.empty() ? lambda_ : spectral_.back().lambda, depth, std::min(lx_, ly_));
+        const SurfaceStats stats = stats_of_ == &hf && stats_version_ == hf_version(hf) ? stats_ : surface_stats(hf, light_, n_mid);
+        return estimate_regime(stats, light_, n_mid, spectral_.empty() ? lambda_ : spectral_.back().lambda, depth,
+                               std::min(lx_, ly_));
     }
+    // Identifies the heights a HeightField holds now (its buffer and size, and a few samples), so that a
+    // surface changed in place between update() and render() is not read from stale statistics.
+    static std::size_t hf_version(const HeightField& hf) {
+        std::size_t v = reinterpret_cast<std::uintptr_t>(hf.height.data()) ^ (hf.height.size() << 1);
+        for (std::size_t k = 0; k < hf.height.size(); k += 1 + hf.height.size() / 64) {
+            std::uint32_t bits;
+            std::memcpy(&bits, &hf.height[k], sizeof bits);
+            v = v * 1000003u ^ bits;
+        }
+        return v;
+    }
+    const HeightField* stats_of_ = nullptr;
+    std::size_t stats_version_ = 0;
+    SurfaceStats stats_;
     bool find_setup(const Scene& scene, std::string& why) const;
     void fill_table(const SurfaceSamples& surface, const std::vector<double>& depths, CausticOutput& out);
     LookupGeometry lookup_geometry(const HeightField& hf, const SurfaceSamples& surface,
