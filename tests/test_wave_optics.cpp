@@ -10,6 +10,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include "../methods/wave_optics/refracted_screen.hpp"
 #include "../methods/wave_optics/regime.hpp"
@@ -615,6 +616,16 @@ TEST(WaveOptics, ObliqueSineConvergesToTheExactTruth) {
     const SineRun thin = run_sine("sine_oblique", -0.25, {{"grid", "1024"}, {"screen", "thin"}});
     std::printf("thin screen, grid 1024: nrmse %.4f\n", thin.nrmse);
     EXPECT_GT(thin.nrmse / thin.baseline, 2.0 * errors.back());
+}
+
+TEST(WaveOptics, RefractedScreenIsIndependentOfTheThreadCount) {
+    const Scene scene = water_scene(HeightGenerator::Sine, 0.01, -0.3, {0.4, 0.2, -1}, 48, 1.0);
+    std::vector<float> runs[2];
+    for (int threads : {1, 2}) {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+        runs[threads - 1] = render_receiver(scene, {{"grid", "256"}}).receiver.pixels;
+    }
+    EXPECT_EQ(runs[0], runs[1]);
 }
 
 TEST(WaveOptics, AccuracyClaimStatesTheRegime) {
