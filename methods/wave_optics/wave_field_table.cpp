@@ -33,7 +33,7 @@ WaveFieldTable::WaveFieldTable(int nx, int ny, bool rgb) : nx_(nx), ny_(ny), rgb
     surface_.height.assign(static_cast<std::size_t>(nx) * ny, 0.0f);
 }
 
-const SurfaceSamples& WaveFieldTable::resample(const HeightField& hf, double lx, double ly, ResamplePath path) {
+EdgeCheck check_edges(const HeightField& hf) {
     // Periodicity: flagged by the generator, or opposite edges equal to within 1e-3 of the height range.
     using Range = std::pair<float, float>;
     const float h0 = hf.height.empty() ? 0.0f : hf.height.front();
@@ -60,10 +60,15 @@ const SurfaceSamples& WaveFieldTable::resample(const HeightField& hf, double lx,
         edge_count += 2;
     }
     const double tolerance = std::max(1e-3 * (hmax - hmin), 1e-9);
-    surface_.periodic = hf.periodic || mismatch <= tolerance;
-    const double edge_mean = edge_sum / std::max<std::size_t>(edge_count, 1);
+    return {hf.periodic || mismatch <= tolerance, edge_sum / std::max<std::size_t>(edge_count, 1)};
+}
+
+const SurfaceSamples& WaveFieldTable::resample(const HeightField& hf, double lx, double ly, ResamplePath path) {
+    const EdgeCheck edges = check_edges(hf);
+    surface_.periodic = edges.periodic;
+    const double edge_mean = edges.edge_mean;
     const double band_x = lx / 16.0, band_y = ly / 16.0;
-    surface_.taper_band = surface_.periodic ? 0.0 : std::min(band_x, band_y);
+    surface_.taper_band = surface_.periodic ? 0.0 : taper_band_width(lx, ly);
 
     // Bilinear weights per grid column / row: grid sample i sits at vertex coordinate i (nx-1) / N.
     std::vector<int> i0(static_cast<std::size_t>(nx_)), j0(static_cast<std::size_t>(ny_));

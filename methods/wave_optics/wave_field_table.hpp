@@ -3,6 +3,7 @@
 // (made periodic), the intensity table (depth slices x grid x grid, mono plus optional RGB) and its
 // lookup at world points (Stam 1996: "storing caustic textures for different depths in a three
 // dimensional table").
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -41,6 +42,17 @@ struct LookupCounters {
     std::int64_t not_covered = 0;  // above the water, or lit through a point outside the surface
     std::int64_t tapered = 0;      // lit through the tapered border band
 };
+
+// Whether the surface tiles (flagged periodic, or opposite edges equal to 1e-3 of the height range), and
+// the mean of its edge heights (what a non-periodic surface is tapered to).
+struct EdgeCheck {
+    bool periodic = true;
+    double edge_mean = 0.0;
+};
+EdgeCheck check_edges(const HeightField& hf);
+
+// Width of the raised-cosine border band of a non-periodic surface: 1/16 of the shorter side.
+inline double taper_band_width(double lx, double ly) { return std::min(lx, ly) / 16.0; }
 
 class WaveFieldTable {
 public:

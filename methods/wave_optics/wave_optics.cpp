@@ -5,6 +5,7 @@
 // in the Fourier domain. The intensity |u|^2, scaled by the transmitted irradiance, is the caustic
 // irradiance. See wave_propagator.hpp for the propagators and their band limit.
 #include <algorithm>
+#include <cstring>
 #include <cmath>
 #include <memory>
 #include <numbers>
@@ -18,9 +19,12 @@
 
 #include "errors.hpp"
 #include "fft.hpp"
+#include "refracted_screen.hpp"
+#include "regime.hpp"
 #include "registry.hpp"
 #include "timing.hpp"
 #include "wave_field_table.hpp"
+#include "wave_math.hpp"
 #include "wave_propagator.hpp"
 
 namespace caustics::wave_optics {
@@ -30,7 +34,9 @@ namespace {
 constexpr const char* kName = "wave_optics";
 
 const char* kDoc =
-    "Stam 1996 wave optics: the water surface is a phase screen phi = k0 (n cos t_t - cos t_i) h on a "
+    "Stam 1996 wave optics: the refracted wave on the water's mean plane (screen=refracted, the default: "
+    "exact Snell refraction, intercepted flux and lateral offset of each surface sample, "
+    "refracted_screen.hpp; screen=thin: Stam's phase screen phi = k0 (n cos t_t - cos t_i) h) on a "
     "grid x grid FFT grid over one period of the surface; the wave propagates to the receiver depth by "
     "a Fourier-domain transfer function (angular spectrum, band-limited after Matsushima & Shimobaba "
     "2009 so the sampled filter is not aliased, or the paraxial Fresnel filter) and its intensity, times "
@@ -41,8 +47,11 @@ const char* kDoc =
     "wavelength is the wavelength in the water; 0 = auto, two grid spacings (Stam/Moravec); shorter than "
     "two grid spacings is refused. wavelengths > 1 averages that many wavelengths over [lambda, 2 lambda] "
     "(reduces spurious diffraction; with material dispersion the index spans ior + dispersion (shortest) "
-    "to ior (longest)) and fills receiver_rgb. Oblique light: a linear phase ramp snapped to the nearest "
-    "frequency the periodic grid holds (health carrier_error_urad: the angular error in micro-radians). "
+    "to ior (longest)) and fills receiver_rgb. Oblique light: the exact carrier (Floquet: only the field "
+    "relative to it is periodic). Claims accuracy (accuracy_claim) before the first focus where the "
+    "diffraction blur is small against the caustic's features (regime.hpp; health past_first_focus = "
+    "points deeper than the paraxial first focus, diffraction_eps_pct = 100 eps at the deepest point, -1 "
+    "past the focus). "
     "Non-periodic surfaces (edges that do not match) are tapered to their edge mean over a border band of "
     "1/16 of the period (health nonperiodic_surface = 1, tapered_lookups = receiver points lit through "
     "the band). depth_slices > 1 tabulates the intensity at that many depths between the shallowest and "
@@ -50,7 +59,8 @@ const char* kDoc =
     "depth (health depth_mismatch counts points more than 1 um off it). Health: sampling_violations "
     "(propagations whose sampling criterion failed: Fresnel z > L^2 / (lambda N); angular spectrum: the "
     "band limit removed more than 1 ppm of the energy), band_limited_ppm, evanescent_ppm, "
-    "phase_aliased_cells (phase step > pi between neighbouring grid cells), not_covered (points above "
+    "phase_aliased_cells (phase step > pi between neighbouring grid cells), screen_folded_cells and "
+    "unlit_cells (surface samples whose refracted map folds or that face away from the light), not_covered (points above "
     "the water or lit from outside the surface's footprint). Transfer functions are cached per depth "
     "and wavelength; walls shadowing the light are ignored. Periodic textures (caustics synth): the intensity "
     "at the texture depth over the FFT period, periodic by construction, resampled bilinearly to the texels.";
@@ -68,6 +78,9 @@ std::vector<ParamSpec> param_table() {
                  "wavelengths averaged over [lambda, 2 lambda] (colour with dispersion; receiver_rgb when > 1)"});
     p.push_back({"blur", ParamType::Float, "0", 0.0, 1e3, {},
                  "Gaussian blur of the intensity, standard deviation [m] on the receiver (0 = none)"});
+    p.push_back({"screen", ParamType::Enum, "refracted", 0, 0, {"refracted", "thin"},
+                 "input field: refracted (exact Snell per surface sample, flux and offset to the mean plane) "
+                 "or thin (Stam's phase screen k0 (n cos t_t - cos t_i) h, unit amplitude)"});
     p.push_back({"depth_slices", ParamType::Int, "1", 1, 64, {},
                  "intensity slices between the shallowest and deepest receiver point, looked up trilinearly"});
     return p;
@@ -84,24 +97,12 @@ std::string fast_size_hint(long long grid) {
     return s.str();
 }
 
-// Unpolarised Fresnel transmittance from air into a medium of index n at incidence cosine ci.
-double fresnel_transmittance(double ci, double n) {
-    const double si2 = std::max(0.0, 1.0 - ci * ci);
-    const double st2 = si2 / (n * n);
-    if (st2 >= 1.0) return 0.0;
-    const double ct = std::sqrt(1.0 - st2);
-    const double rs = (ci - n * ct) / (ci + n * ct);
-    const double rp = (n * ci - ct) / (n * ci + ct);
-    return 1.0 - 0.5 * (rs * rs + rp * rp);
-}
-
 // One wavelength sample of the band.
 struct Spectral {
     double lambda = 0.0;        // in the water [m]
     double n = 1.33;            // index of refraction
     double phase_per_m = 0.0;   // phase screen: radians per metre of height
     glm::dvec3 refracted{0.0, 0.0, -1.0};   // true refracted direction (mean surface)
-    double carrier_error_rad = 0.0;
     float rgb[3] = {0, 0, 0};   // channel weights (each channel's weights sum to 1 over the samples)
     std::unique_ptr<WavePropagator> propagator;
 };
@@ -150,13 +151,39 @@ void fill_texture(const WaveFieldTable& table, int n, const LookupGeometry& geo,
     });
 }
 
+// u = a exp(i k0 P) of a refracted screen into `field` (n x n); returns the cells whose phase step to the
+// next cell in x or y exceeds pi (the screen is under-resolved there), as set_phase_screen() does.
+std::int64_t refracted_field(const RefractedScreen& screen, int n, double k0, std::vector<ComplexF>& field) {
+    field.resize(static_cast<std::size_t>(n) * n);
+    std::vector<std::int64_t> aliased(static_cast<std::size_t>(n), 0);
+    const double limit = std::numbers::pi / k0;
+    tbb::parallel_for(0, n, [&](int j) {
+        const std::size_t row = static_cast<std::size_t>(j) * n, next = static_cast<std::size_t>((j + 1) % n) * n;
+        std::int64_t count = 0;
+        for (int i = 0; i < n; ++i) {
+            const float* P = screen.path.data();
+            float s, c;
+            fast_sincos(static_cast<float>(k0 * P[row + i]), s, c);   // |phase| < 1e4, as set_phase_screen's
+            const float a = screen.amplitude[row + i];
+            field[row + i] = ComplexF(a * c, a * s);
+            const int i1 = (i + 1) % n;
+            count += static_cast<int>(std::abs(P[row + i1] - P[row + i]) > limit) |
+                     static_cast<int>(std::abs(P[next + i] - P[row + i]) > limit);
+        }
+        aliased[static_cast<std::size_t>(j)] = count;
+    });
+    std::int64_t total = 0;
+    for (std::int64_t c : aliased) total += c;
+    return total;
+}
+
 class WaveOpticsMethod final : public Method {
 public:
     explicit WaveOpticsMethod(const ParamSet& p)
         : grid_(static_cast<int>(p.get_int("grid"))), wavelength_(p.get_float("wavelength")),
           fresnel_(p.get_enum("propagator") == "fresnel"),
           samples_(static_cast<int>(p.get_int("wavelengths"))), blur_(p.get_float("blur")),
-          slices_(static_cast<int>(p.get_int("depth_slices"))) {
+          slices_(static_cast<int>(p.get_int("depth_slices"))), thin_screen_(p.get_enum("screen") == "thin") {
         if (!is_fast_fft_size(grid_)) throw InputError(kName, "grid", fast_size_hint(grid_));
     }
 
@@ -219,14 +246,9 @@ public:
             sp.refracted = glm::dvec3(s_t.x, s_t.y, -cos_t);
             const double lambda0 = sp.n * sp.lambda;                  // vacuum wavelength
             sp.phase_per_m = 2.0 * std::numbers::pi / lambda0 * (sp.n * cos_t - cos_i_);
-            // Carrier: transverse frequency s_t / lambda, snapped to the lattice 1 / L.
-            const glm::ivec2 bins(static_cast<int>(std::lround(s_t.x / sp.lambda * lx_)),
-                                  static_cast<int>(std::lround(s_t.y / sp.lambda * ly_)));
-            const glm::dvec2 snapped_s(bins.x * sp.lambda / lx_, bins.y * sp.lambda / ly_);
-            const double snapped_c = std::sqrt(std::max(0.0, 1.0 - glm::dot(snapped_s, snapped_s)));
-            const glm::dvec3 snapped(snapped_s.x, snapped_s.y, -snapped_c);
-            sp.carrier_error_rad = std::atan2(glm::length(glm::cross(snapped, sp.refracted)),
-                                              glm::dot(snapped, sp.refracted));
+            // Carrier: the exact transverse frequency s_t / lambda (the field without it is periodic, so
+            // it need not lie on the lattice 1 / L; snapping it tilted the light by up to lambda / 2L).
+            const glm::dvec2 bins(s_t.x / sp.lambda * lx_, s_t.y / sp.lambda * ly_);
             WaveSetup setup;
             setup.nx = setup.ny = grid_;
             setup.lx = lx_;
@@ -240,12 +262,88 @@ public:
         for (auto& sp : spectral_)
             for (int c = 0; c < 3; ++c) sp.rgb[c] = rgb_sum[c] > 0.0 ? static_cast<float>(sp.rgb[c] / rgb_sum[c]) : 1.0f / samples_;
         transmittance_ = scene.fresnel ? fresnel_transmittance(cos_i_, n_mid) : 1.0;
+        scene_fresnel_ = scene.fresnel;
+        stats_of_ = nullptr;
+        light_ = dir;
+        screens_.clear();
+        screens_used_ = 0;
         table_ = std::make_unique<WaveFieldTable>(grid_, grid_, samples_ > 1);
     }
 
     CausticOutput render(const FrameGeometry& frame, const RenderRequest& request) override;
 
+    void update(const FrameGeometry& frame) override {
+        const HeightField& hf = *frame.objects.at(static_cast<std::size_t>(water_index_)).heightfield;
+        const double n_mid = spectral_.empty() ? 1.33 : 0.5 * (spectral_.front().n + spectral_.back().n);
+        stats_ = surface_stats(hf, light_, n_mid);
+        stats_of_ = &hf;
+        stats_version_ = hf_version(hf);
+    }
+
+    // Inside the geometric-optics regime (regime.hpp) at the deepest receiver point: the error factor
+    // measured on the sine cases with margin (README.md); outside: the bound with its numbers.
+    AccuracyClaim accuracy_claim(const FrameGeometry& frame) const override {
+        const HeightField& hf = *frame.objects.at(static_cast<std::size_t>(water_index_)).heightfield;
+        const ReceiverChart chart(frame, 2, 2);
+        double depth = 0.0;
+        const double level = mean_level(hf);
+        // A non-periodic surface is tapered over its border band: light entering there (or outside the
+        // surface) is not the scene's. Entry points of the geometric beam, on a 9 x 9 net of the receiver.
+        const double band = check_edges(hf).periodic ? 0.0 : taper_band_width(lx_, ly_);
+        const glm::dvec2 beam_walk = glm::dvec2(refracted_.x, refracted_.y) / std::max(1e-9, -refracted_.z);
+        double margin = 1e300;
+        for (int j = 0; j <= 8; ++j)
+            for (int i = 0; i <= 8; ++i) {
+                const glm::dvec3 p = chart.point(i / 8.0, j / 8.0);
+                const double z = level - p.z;
+                depth = std::max(depth, z);
+                const glm::dvec2 rel = glm::dvec2(p) - z * beam_walk - glm::dvec2(hf.origin);
+                margin = std::min({margin, rel.x, rel.y, lx_ - rel.x, ly_ - rel.y});
+            }
+        if (margin < band) {
+            std::ostringstream s;
+            s.precision(3);
+            s << "wave_optics: light reaching the receiver enters " << (margin < 0.0 ? "outside the surface" : "through its border band")
+              << " (" << margin << " m from its edge; the surface does not tile and is tapered over " << band
+              << " m at its edges)";
+            return AccuracyClaim::outside(s.str());
+        }
+        const std::string why = regime_violation(regime(hf, depth));
+        return why.empty() ? AccuracyClaim::within(kClaimFactor) : AccuracyClaim::outside("wave_optics: " + why);
+    }
+
 private:
+    static constexpr double kClaimFactor = 0.5;
+    static double mean_level(const HeightField& hf) {
+        double sum = 0.0;
+        for (float z : hf.height) sum += z;
+        return hf.height.empty() ? 0.0 : sum / static_cast<double>(hf.height.size());
+    }
+    // The regime at `depth` below the mean level, for the longest wavelength propagated.
+    // From the height field's vertices (the claim and the health agree; the FFT grid's bilinear
+    // resampling would add kinks to the curvature).
+    // The surface's part is computed by update() (it depends on the frame's geometry only, like an
+    // acceleration structure) and kept for the frame's renders and claim; computed here otherwise.
+    Regime regime(const HeightField& hf, double depth) const {
+        const double n_mid = spectral_.empty() ? 1.33 : 0.5 * (spectral_.front().n + spectral_.back().n);
+        const SurfaceStats stats = stats_of_ == &hf && stats_version_ == hf_version(hf) ? stats_ : surface_stats(hf, light_, n_mid);
+        return estimate_regime(stats, light_, n_mid, spectral_.empty() ? lambda_ : spectral_.back().lambda, depth,
+                               std::min(lx_, ly_));
+    }
+    // Identifies the heights a HeightField holds now (its buffer and size, and a few samples), so that a
+    // surface changed in place between update() and render() is not read from stale statistics.
+    static std::size_t hf_version(const HeightField& hf) {
+        std::size_t v = reinterpret_cast<std::uintptr_t>(hf.height.data()) ^ (hf.height.size() << 1);
+        for (std::size_t k = 0; k < hf.height.size(); k += 1 + hf.height.size() / 64) {
+            std::uint32_t bits;
+            std::memcpy(&bits, &hf.height[k], sizeof bits);
+            v = v * 1000003u ^ bits;
+        }
+        return v;
+    }
+    const HeightField* stats_of_ = nullptr;
+    std::size_t stats_version_ = 0;
+    SurfaceStats stats_;
     bool find_setup(const Scene& scene, std::string& why) const;
     void fill_table(const SurfaceSamples& surface, const std::vector<double>& depths, CausticOutput& out);
     LookupGeometry lookup_geometry(const HeightField& hf, const SurfaceSamples& surface,
@@ -256,9 +354,19 @@ private:
     int samples_;
     double blur_;
     int slices_;
+    bool thin_screen_;
     mutable int water_index_ = -1;
     double lx_ = 1.0, ly_ = 1.0, lambda_ = 0.0;
     double cos_i_ = 1.0, irradiance_ = 1.0, absorption_ = 0.0, transmittance_ = 1.0;
+    bool scene_fresnel_ = false;
+    glm::dvec3 light_{0.0, 0.0, -1.0};
+    // Refracted screens of the current frame, one per distinct index (samples share them without
+    // dispersion; the first screens_used_ are current, the buffers are kept between frames), and the
+    // field buffer handed to the propagators.
+    std::vector<std::pair<double, RefractedScreen>> screens_;
+    std::size_t screens_used_ = 0;
+    std::vector<ComplexF> field_;
+    const RefractedScreen& screen_for(const SurfaceSamples& surface, double n, CausticOutput& out);
     glm::dvec3 refracted_{0.0, 0.0, -1.0};
     std::vector<Spectral> spectral_;
     std::unique_ptr<WaveFieldTable> table_;
@@ -310,12 +418,18 @@ void WaveOpticsMethod::fill_table(const SurfaceSamples& surface, const std::vect
     table_->begin(static_cast<int>(depths.size()));
     double phase_ms = 0.0, propagate_ms = 0.0;
     std::int64_t violations = 0, aliased = 0;
-    double band_ppm = 0.0, evan_ppm = 0.0, carrier_error = 0.0;
+    double band_ppm = 0.0, evan_ppm = 0.0;
+    screens_used_ = 0;
     if (!depths.empty()) {
         for (std::size_t m = 0; m < spectral_.size(); ++m) {
             Spectral& sp = spectral_[m];
-            carrier_error = std::max(carrier_error, sp.carrier_error_rad);
-            aliased += sp.propagator->set_phase_screen(surface.height.data(), static_cast<float>(sp.phase_per_m));
+            if (thin_screen_) {
+                aliased += sp.propagator->set_phase_screen(surface.height.data(), static_cast<float>(sp.phase_per_m));
+            } else {
+                const RefractedScreen& screen = screen_for(surface, sp.n, out);
+                aliased += refracted_field(screen, grid_, 2.0 * std::numbers::pi / (sp.n * sp.lambda), field_);
+                sp.propagator->set_field(field_.data());
+            }
             phase_ms += lap();
             for (std::size_t s = 0; s < depths.size(); ++s) {
                 IntensityTarget targets[4];
@@ -336,9 +450,29 @@ void WaveOpticsMethod::fill_table(const SurfaceSamples& surface, const std::vect
     out.health.add("phase_aliased_cells", aliased);
     out.health.add("band_limited_ppm", std::llround(band_ppm));
     out.health.add("evanescent_ppm", std::llround(evan_ppm));
-    out.health.add("carrier_error_urad", std::llround(carrier_error * 1e6));
     if (blur_ > 0.0) table_->blur(blur_, lx_, ly_);
     out.stages_ms.emplace_back("blur", lap());
+}
+
+// The refracted screen for index n (built once per frame and index).
+const RefractedScreen& WaveOpticsMethod::screen_for(const SurfaceSamples& surface, double n, CausticOutput& out) {
+    for (std::size_t k = 0; k < screens_used_; ++k)
+        if (screens_[k].first == n) return screens_[k].second;
+    RefractionSetup rs;
+    rs.nx = rs.ny = grid_;
+    rs.lx = lx_;
+    rs.ly = ly_;
+    rs.light = light_;
+    rs.ior = n;
+    rs.fresnel = scene_fresnel_;
+    rs.absorption = absorption_;
+    if (screens_used_ == screens_.size()) screens_.emplace_back();
+    screens_[screens_used_].first = n;
+    RefractedScreen& screen = screens_[screens_used_++].second;
+    build_refracted_screen(surface.height.data(), rs, screen);
+    out.health.add("screen_folded_cells", screen.folded_cells);
+    out.health.add("unlit_cells", screen.unlit_cells);
+    return screen;
 }
 
 // Lookup frame of the table for the frame's surface (step 5 of render(), and textures).
@@ -433,6 +567,14 @@ CausticOutput WaveOpticsMethod::render(const FrameGeometry& frame, const RenderR
         } else {
             for (int s = 0; s < slices_; ++s) depths.push_back(zmin + (zmax - zmin) * s / (slices_ - 1));
         }
+    }
+    // The regime at the deepest point (regime.hpp): points past the first focus, and eps in percent.
+    if (!depths.empty()) {
+        const Regime r = regime(hf, zmax);
+        std::int64_t past = 0;
+        for (const ShadePoint& p : points) past += surface.level - p.position.z > r.focus_depth ? 1 : 0;
+        out.health.add("past_first_focus", past);
+        out.health.add("diffraction_eps_pct", std::isfinite(r.epsilon) ? std::llround(std::min(100.0 * r.epsilon, 1e9)) : -1);
     }
     out.stages_ms.emplace_back("points", lap());
 

@@ -5,8 +5,9 @@
 // builds the phase screen from the water surface and looks the intensities up on the receiver; tests use
 // this class directly.
 //
-// The field may ride on a carrier (oblique light): u_total = exp(2 pi i fc . x) u with fc on the grid's
-// frequency lattice (carrier_bins). Only u is stored; its spectrum bin f is propagated with the transfer
+// The field may ride on a carrier (oblique light): u_total = exp(2 pi i fc . x) u, fc = carrier_bins / L,
+// any real bins: only u need be periodic (Floquet), so the carrier need not lie on the grid's frequency
+// lattice and the light keeps its exact direction. Only u is stored; its spectrum bin f is propagated with the transfer
 // function of the total frequency f + fc, relative to the carrier itself, and with the carrier's lateral
 // walk removed ("shifted" propagation):
 //   I_z(x) here  =  |u_total(x + z w_c, z)|^2,   w_c = carrier walk per unit depth (carrier_walk()).
@@ -41,7 +42,7 @@ struct WaveSetup {
     double lx = 1.0, ly = 1.0;        // period [m]
     double wavelength = 0.0;          // in the medium [m]
     Propagator propagator = Propagator::AngularSpectrum;
-    glm::ivec2 carrier_bins{0, 0};    // carrier frequency fc = (bx / lx, by / ly)
+    glm::dvec2 carrier_bins{0.0, 0.0};  // carrier frequency fc = (bx / lx, by / ly), fractional allowed
     // The lateral walk per unit depth removed from the propagated field (the caller shifts its lookups
     // by depth * walk). Default: the carrier's own walk. The method passes the true refracted beam's
     // tan(theta_t) so that every wavelength and both propagators share one lookup frame.

@@ -1,0 +1,60 @@
+#pragma once
+// Where the wave_optics method reproduces geometric optics, estimated from the surface, the light, the
+// receiver depth and the wavelength (the accuracy_claim and health of the method).
+//
+// A wave leaving a phase screen focuses like the rays it carries only where diffraction cannot blur the
+// structure the rays form. Along the light's tilt the refracted light's lateral offset grows as
+// X = x + z (c / n) grad h / cos^3(theta_t) (across it, / cos(theta_t)), c = n cos(theta_t) - cos(theta_i), so
+// the map x -> X first folds at the depth z_f = -1 / e_min, e_min the most negative eigenvalue of
+// (c / n) M^1/2 Hess(h) M^1/2, M = diag(1 / cos^3, 1 / cos) (the paraxial first focus; the sine scenes'
+// 0.64 m at normal incidence). Past it (rho = z / z_f >= 1) several rays reach each point: the coherent
+// wave draws their interference fringes and Airy-type folds, which converge to the geometric sum only
+// weakly as lambda -> 0, so nothing is claimed there. Before it, the stationary-phase approximation that
+// links the wave to the rays holds while the diffraction blur sqrt(2 pi lambda z_eff) (z_eff = z /
+// cos^3(theta_t)) is small against the caustic's features, whose size shrinks as (1 - rho)^1.5 / rho times
+// the surface's length scale l = 2 pi max|grad h| / max|Hess h| (the period of a sine):
+//   eps = rho sqrt(2 pi lambda z_eff) / (l (1 - rho)^1.5),
+// the ratio of the cubic term of the phase to its quadratic term over the stationary zone (for a sine:
+// the error grows as ~0.08 eps^2 times the flat baseline's, measured at normal incidence). The angular
+// spectrum's band limit needs the light's lateral spread z (c / n) max|grad h| / cos^3 within half a
+// period.
+#include <string>
+
+#include <glm/glm.hpp>
+
+#include "heightfield.hpp"
+
+namespace caustics::wave_optics {
+
+struct Regime {
+    double focus_depth = 0.0;    // z_f [m]; infinite when nothing converges
+    double length_scale = 0.0;   // l [m]
+    double depth = 0.0;          // the deepest receiver point below the mean level [m]
+    double rho = 0.0;            // depth / z_f
+    double blur = 0.0;           // sqrt(2 pi lambda z_eff) [m]
+    double epsilon = 0.0;        // see above (infinite at or past the focus)
+    double spread = 0.0;         // lateral spread of the light at `depth` over half the period
+};
+
+// Bound on eps inside which the method claims its accuracy.
+constexpr double kMaxEpsilon = 2.0;
+
+// The surface's part: the most negative focusing eigenvalue e_min [1/m] (z_f = -1 / e_min), max |grad h|
+// and max |Hess h| (largest principal curvature) [1/m], by central differences on a height grid
+// (periodic: wrapped; else the interior), rows in parallel, reduced in a fixed order.
+struct SurfaceStats {
+    double e_min = 0.0, slope = 0.0, curvature = 0.0;
+};
+SurfaceStats surface_stats(const float* h, int nx, int ny, double dx, double dy, bool periodic, const glm::dvec3& light,
+                           double ior);
+SurfaceStats surface_stats(const HeightField& hf, const glm::dvec3& light, double ior);
+
+// lambda: the longest wavelength in the water the method propagates; period: the shorter side of the
+// FFT window.
+Regime estimate_regime(const SurfaceStats& stats, const glm::dvec3& light, double ior, double lambda, double depth,
+                       double period);
+
+// Empty when inside, else the bound the frame passes with its numbers.
+std::string regime_violation(const Regime& r);
+
+}  // namespace caustics::wave_optics
