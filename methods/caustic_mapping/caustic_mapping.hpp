@@ -24,12 +24,13 @@ struct Settings {
     FluxWeight flux = FluxWeight::Radiometric;
     SplatKernel splat = SplatKernel::Gaussian;
     bool adaptive = true;          // per-splat radius from the neighbours' landing spacing (splats.hpp)
+    bool elliptic = true;          // per-splat covariance from the landing map's Jacobian (elliptic_splats.hpp)
     double splat_radius = 0.0;   // texels; 0: auto (gaussian: 2.5 grid spacings; adaptive: minimum 1)
     double lowpass = 0.0;        // texels; 0: off
     CubeMode cube = CubeMode::Auto;
     bool bilinear = true;
     int bin_samples = 0;           // receiver map: n x n lookups per bin; 0: auto (texels per bin side)
-    int extend = 32;               // texels the receivers' positions are extrapolated past their edges
+    int extend = -1;               // texels the receivers' positions are extrapolated past their edges; -1: all
     bool absorption = true;
     double depth_bias = 1.0;
     bool debug_maps = false;
@@ -38,7 +39,8 @@ struct Settings {
 // Per-render health, summed over threads.
 struct Counters {
     std::int64_t covered = 0, grazing = 0, null_value = 0, null_exit = 0, not_converged = 0, oscillating = 0,
-                 bisection = 0, bad_derivative = 0, tir = 0, nonfinite = 0, lookups = 0, lost_outside = 0;
+                 bisection = 0, bad_derivative = 0, tir = 0, nonfinite = 0, lookups = 0, lost_outside = 0,
+                 missed = 0;
     void add(const Counters& o);
 };
 

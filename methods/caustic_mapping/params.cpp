@@ -20,7 +20,8 @@ Settings settings_from(const ParamSet& p) {
     s.estimator.bisection_steps = static_cast<int>(p.get_int("bisection_steps"));
     s.flux = p.get_enum("flux_weight") == "paper" ? FluxWeight::Paper : FluxWeight::Radiometric;
     s.splat = p.get_enum("splat") == "point" ? SplatKernel::Point : SplatKernel::Gaussian;
-    s.adaptive = p.get_enum("splat") == "adaptive";
+    s.elliptic = p.get_enum("splat") == "elliptic";
+    s.adaptive = s.elliptic || p.get_enum("splat") == "adaptive";
     s.splat_radius = p.get_float("splat_radius");
     s.lowpass = p.get_float("lowpass");
     const std::string& cube = p.get_enum("cube_map");
@@ -64,18 +65,22 @@ MethodInfo caustic_mapping_info() {
         {"bisection_steps", ParamType::Int, "8", 1, 64, {}, "minimum bisection steps once the safeguard engages"},
         {"flux_weight", ParamType::Enum, "radiometric", 0, 0, {"radiometric", "paper"},
          "radiometric: E0 x texel area (I x solid angle) per vertex; paper: Eq. 6 (N.L)/V times the total flux"},
-        {"splat", ParamType::Enum, "adaptive", 0, 0, {"point", "gaussian", "adaptive"},
+        {"splat", ParamType::Enum, "elliptic", 0, 0, {"point", "gaussian", "adaptive", "elliptic"},
          "point: one texel per vertex (the paper); gaussian: normalised (flux-conserving) Gaussian footprint of a "
-         "fixed radius; adaptive: Gaussian of 1.75 x the local spacing of neighbouring vertices' landing points "
-         "(follows the ray density: sharp foci, no gaps where the light spreads; not in the paper)"},
+         "fixed radius; adaptive: isotropic Gaussian of 1.75 x the larger local spacing of neighbouring vertices' "
+         "landing points; elliptic: Gaussian whose covariance is the landing map's Jacobian times half a grid "
+         "spacing (follows the ray density in each direction: focused lines stay sharp across, no gaps along; "
+         "adaptive and elliptic are not in the paper)"},
         {"splat_radius", ParamType::Float, "0", 0.0, 100.0, {},
          "Gaussian support in caustic-map texels (sigma = radius/3.5); 0: auto (gaussian: 2.5 grid spacings; "
-         "adaptive: the smallest footprint, 1 texel)"},
+         "adaptive, elliptic: the smallest footprint, 1 texel)"},
         {"lowpass", ParamType::Float, "0", 0.0, 64.0, {}, "flux-conserving Gaussian low-pass radius of the caustic map in texels; 0: off"},
         {"cube_map", ParamType::Enum, "auto", 0, 0, {"auto", "off", "on"},
          "point lights: six-face cube map for receivers (auto: when one frustum would exceed 60 degrees off-axis; off: one frustum clamped at 80)"},
-        {"extend", ParamType::Int, "32", 0, 1024, {},
-         "extrapolate the receivers' positions texture this many texels (at most map/8) past their edges (0: the paper's null value at edges)"},
+        {"extend", ParamType::Int, "-1", -1, 1024, {},
+         "extrapolate the receivers' positions texture this many texels (at most map/8) past their edges; -1: to "
+         "the texture's edges, which also cover the specular objects (estimates started beside a receiver under "
+         "tilted light step onto it); 0: the paper's null value at edges"},
         {"bin_samples", ParamType::Int, "0", 0, 16, {},
          "receiver map: n x n caustic-map lookups averaged per bin (a bin holds the mean over its area); 1: the "
          "bin centre (the paper's per-pixel lookup); 0: auto, n = caustic-map texels per bin side (at most 16)"},
