@@ -65,6 +65,7 @@ public:
         frame_index_ = frame.frame;
     }
     CausticOutput render(const FrameGeometry& frame, const RenderRequest& request) override;
+    AccuracyClaim accuracy_claim(const FrameGeometry& frame) const override { return claim_for(frame, s_); }
 
 private:
     void draw_gbuffers(const FrameGeometry& frame, const Light& light, Counters& c, std::int64_t& clipped);
@@ -293,6 +294,12 @@ void CausticMapping::trace(const Scene& scene, const Light& light, Counters& tot
                     ++c.lost_outside;
                     continue;
                 }
+                {   // Landed on the extrapolated rim, off every receiver: counted, and still splatted so
+                    // that the footprints of the light landing just inside an edge stay whole.
+                    const GBuffer& rg = receivers_.maps[static_cast<std::size_t>(t.face)];
+                    const int tx = std::min(static_cast<int>(t.px), rg.width - 1), ty = std::min(static_cast<int>(t.py), rg.height - 1);
+                    if (rg.id[rg.index(tx, ty)] == kExtended) ++c.missed;
+                }
                 const float value = static_cast<float>(flux * weight);
                 if (!std::isfinite(value)) {
                     ++c.nonfinite;
@@ -374,7 +381,9 @@ CausticOutput CausticMapping::render(const FrameGeometry& frame, const RenderReq
     h.add("null_value", c.null_value);
     h.add("null_exit", c.null_exit);
     h.add("lost_samples", c.null_value + c.null_exit + c.tir + c.grazing + c.lost_outside + splat_stats.outside);
-    h.add("missed_receivers", c.missed);   // light leaving the receivers' window (not lost: no receiver there)
+    // Light that lands off every receiver (beyond the window, or on the extrapolated rim): not lost, there
+    // is no receiver there.
+    h.add("missed_receivers", c.missed);
     h.add("not_converged", c.not_converged);
     h.add("oscillating", c.oscillating);
     h.add("bisection_fallbacks", c.bisection);

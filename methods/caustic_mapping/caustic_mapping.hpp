@@ -17,6 +17,9 @@ namespace caustics::caustic_mapping {
 enum class FluxWeight { Radiometric, Paper };
 enum class CubeMode { Auto, Off, On };
 
+constexpr int kMapPerGrid = 6;      // map = 0 (auto): caustic-map texels per grid vertex
+constexpr int kMinAutoMap = 768, kMaxAutoMap = 4096;
+
 struct Settings {
     int grid = 128;
     int map = 768;
@@ -45,6 +48,15 @@ struct Counters {
 };
 
 Settings settings_from(const ParamSet& p);
+
+// The claimed regime (Method::accuracy_claim), measured on the sine cases at the default map (README.md):
+// water (a dielectric height field) under one light at most kMaxTiltDeg from the vertical and grid >=
+// kMinGrid: nrmse <= kBeforeFocusFactor x the flat baseline's where the receiver lies above the paraxial
+// first focus, kPastFocusFactor past it (folds). Receivers at less than kMinContrast of the focal depth
+// (ior 1, flat water) see no caustic: the flat baseline is exact and the claim is flatness instead.
+constexpr double kMaxTiltDeg = 45.0, kMinContrast = 0.05, kBeforeFocusFactor = 0.15, kPastFocusFactor = 0.5;
+constexpr int kMinGrid = 64;
+AccuracyClaim claim_for(const FrameGeometry& frame, const Settings& s);
 MethodInfo caustic_mapping_info();
 std::unique_ptr<Method> make_caustic_mapping(const ParamSet& p);
 

@@ -34,10 +34,37 @@ struct Print {
     double scale;           // value / (sum of the weights over the whole support)
 };
 
-// Weight of the texel centred at offset (dx, dy) from the splat; 0 outside the cut-off ellipse.
-inline double weight(const Print& p, double dx, double dy) {
-    const double q = p.ixx * dx * dx + 2.0 * p.ixy * dx * dy + p.iyy * dy * dy;
-    return q <= 0.5 * kEllipticCutoff * kEllipticCutoff ? std::exp(-q) : 0.0;
+// Calls f(i, w) for the texels i of row j whose centres lie inside the splat's cut-off ellipse, with
+// their weights exp(-q), q = (d^T Sigma^-1 d) / 2. Along a row q is quadratic in i, so consecutive weights
+// differ by a ratio that itself changes by a constant factor: three exponentials per row (as the
+// separable taps of harness/splat.cpp), whatever the footprint's size. Both passes (normalisation and
+// drawing) use this one function, so they see the same texels and weights.
+template <class F>
+inline void row_weights(const Print& p, glm::dvec2 c, int j, F&& f) {
+    const double dy = j + 0.5 - c.y;
+    const double qmax = 0.5 * kEllipticCutoff * kEllipticCutoff;
+    double lo, hi;   // offsets dx of the ellipse's chord on this row
+    if (p.ixx > 0.0) {
+        const double disc = p.ixy * p.ixy * dy * dy - p.ixx * (p.iyy * dy * dy - qmax);
+        if (disc < 0.0) return;
+        const double root = std::sqrt(disc);
+        lo = (-p.ixy * dy - root) / p.ixx, hi = (-p.ixy * dy + root) / p.ixx;
+    } else {   // the nearest-texel fallback (no quadratic form): the one texel (x0, y0)
+        if (j == p.y0) f(p.x0, 1.0);
+        return;
+    }
+    const int i0 = std::max(static_cast<int>(std::ceil(c.x - 0.5 + lo)), p.x0);
+    const int i1 = std::min(static_cast<int>(std::floor(c.x - 0.5 + hi)), p.x1);
+    if (i0 > i1) return;
+    const double dx = i0 + 0.5 - c.x;
+    double w = std::exp(-(p.ixx * dx * dx + 2.0 * p.ixy * dx * dy + p.iyy * dy * dy));
+    double ratio = std::exp(-(p.ixx * (2.0 * dx + 1.0) + 2.0 * p.ixy * dy));
+    const double step = std::exp(-2.0 * p.ixx);
+    for (int i = i0; i <= i1; ++i) {
+        f(i, w);
+        w *= ratio;
+        ratio *= step;
+    }
 }
 
 }  // namespace
@@ -109,12 +136,14 @@ SplatStats draw_elliptic(const std::vector<EllipticSplat>& splats, Image& target
             p.x0 = static_cast<int>(std::ceil(s.pixel.x - 0.5 - hx)), p.x1 = static_cast<int>(std::floor(s.pixel.x - 0.5 + hx));
             p.y0 = static_cast<int>(std::ceil(s.pixel.y - 0.5 - hy)), p.y1 = static_cast<int>(std::floor(s.pixel.y - 0.5 + hy));
             double sum = 0.0, in = 0.0;
-            for (int j = p.y0; j <= p.y1; ++j)
-                for (int i = p.x0; i <= p.x1; ++i) {
-                    const double w = weight(p, i + 0.5 - s.pixel.x, j + 0.5 - s.pixel.y);
+            const glm::dvec2 c(s.pixel);
+            for (int j = p.y0; j <= p.y1; ++j) {
+                const bool row_in = j >= 0 && j < H;
+                row_weights(p, c, j, [&](int i, double w) {
                     sum += w;
-                    if (i >= 0 && j >= 0 && i < W && j < H) in += w;
-                }
+                    if (row_in && i >= 0 && i < W) in += w;
+                });
+            }
             if (!(sum > 0.0)) {   // a footprint narrower than a texel between centres: the nearest texel
                 p.x0 = p.x1 = static_cast<int>(std::floor(s.pixel.x));
                 p.y0 = p.y1 = static_cast<int>(std::floor(s.pixel.y));
@@ -154,10 +183,13 @@ SplatStats draw_elliptic(const std::vector<EllipticSplat>& splats, Image& target
             const int r0 = b * kBandRows, r1 = std::min(H, r0 + kBandRows) - 1;
             for (std::uint32_t k : in_band[static_cast<std::size_t>(b)]) {
                 const Print& p = prints[k];
-                const glm::vec2 c = splats[k].pixel;
-                for (int j = std::max(p.y0, r0); j <= std::min(p.y1, r1); ++j)
-                    for (int i = std::max(p.x0, 0); i <= std::min(p.x1, W - 1); ++i)
-                        target.at(i, j) += static_cast<float>(p.scale * weight(p, i + 0.5 - c.x, j + 0.5 - c.y));
+                const glm::dvec2 c(splats[k].pixel);
+                for (int j = std::max(p.y0, r0); j <= std::min(p.y1, r1); ++j) {
+                    float* row = &target.at(0, j);
+                    row_weights(p, c, j, [&](int i, double w) {
+                        if (i >= 0 && i < W) row[i] += static_cast<float>(p.scale * w);
+                    });
+                }
             }
         }
     });
