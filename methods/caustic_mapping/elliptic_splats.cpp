@@ -1,6 +1,7 @@
 #include "elliptic_splats.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include <tbb/blocked_range.h>
@@ -34,13 +35,37 @@ struct Print {
     double scale;           // value / (sum of the weights over the whole support)
 };
 
+// exp(-q) for q in [0, kQMax] (the cut-off ellipse; clamped), linear interpolation in a table: the
+// splats' inner loops then cost a few multiply-adds per texel, no exponential (a per-row exp made the
+// elliptical footprints six times slower than the separable isotropic ones). Relative error below 1e-7.
+class NegExpTable {
+public:
+    static constexpr int kSize = 8192;
+    static constexpr double kQMax = 0.5 * kEllipticCutoff * kEllipticCutoff + 0.5;
+    NegExpTable() {
+        for (int k = 0; k <= kSize + 1; ++k) t_[static_cast<std::size_t>(k)] = std::exp(-k * kQMax / kSize);
+    }
+    double operator()(double q) const {
+        const double x = std::clamp(q, 0.0, kQMax) * (kSize / kQMax);
+        const int k = std::min(static_cast<int>(x), kSize);
+        const double f = x - k;
+        return t_[static_cast<std::size_t>(k)] + f * (t_[static_cast<std::size_t>(k) + 1] - t_[static_cast<std::size_t>(k)]);
+    }
+
+private:
+    std::array<double, kSize + 2> t_{};
+};
+
+const NegExpTable& neg_exp() {
+    static const NegExpTable table;   // thread-safe initialisation, once
+    return table;
+}
+
 // Calls f(i, w) for the texels i of row j whose centres lie inside the splat's cut-off ellipse, with
-// their weights exp(-q), q = (d^T Sigma^-1 d) / 2. Along a row q is quadratic in i, so consecutive weights
-// differ by a ratio that itself changes by a constant factor: three exponentials per row (as the
-// separable taps of harness/splat.cpp), whatever the footprint's size. Both passes (normalisation and
-// drawing) use this one function, so they see the same texels and weights.
+// their weights exp(-q), q = (d^T Sigma^-1 d) / 2. Both passes (normalisation and drawing) use this one function, so they see the same
+// texels and weights.
 template <class F>
-inline void row_weights(const Print& p, glm::dvec2 c, int j, F&& f) {
+inline void row_weights(const Print& p, glm::dvec2 c, int j, const NegExpTable& ex, F&& f) {
     const double dy = j + 0.5 - c.y;
     const double qmax = 0.5 * kEllipticCutoff * kEllipticCutoff;
     double lo, hi;   // offsets dx of the ellipse's chord on this row
@@ -56,14 +81,12 @@ inline void row_weights(const Print& p, glm::dvec2 c, int j, F&& f) {
     const int i0 = std::max(static_cast<int>(std::ceil(c.x - 0.5 + lo)), p.x0);
     const int i1 = std::min(static_cast<int>(std::floor(c.x - 0.5 + hi)), p.x1);
     if (i0 > i1) return;
-    const double dx = i0 + 0.5 - c.x;
-    double w = std::exp(-(p.ixx * dx * dx + 2.0 * p.ixy * dx * dy + p.iyy * dy * dy));
-    double ratio = std::exp(-(p.ixx * (2.0 * dx + 1.0) + 2.0 * p.ixy * dy));
-    const double step = std::exp(-2.0 * p.ixx);
+    // q(i) = ixx u^2 + (2 ixy dy) u + iyy dy^2, u = i + 1/2 - c.x: evaluated per texel (independent
+    // iterations pipeline better than a running recurrence).
+    const double b = 2.0 * p.ixy * dy, c0 = p.iyy * dy * dy, u0 = 0.5 - c.x;
     for (int i = i0; i <= i1; ++i) {
-        f(i, w);
-        w *= ratio;
-        ratio *= step;
+        const double u = i + u0;
+        f(i, ex((p.ixx * u + b) * u + c0));
     }
 }
 
@@ -121,6 +144,7 @@ SplatStats draw_elliptic(const std::vector<EllipticSplat>& splats, Image& target
     std::vector<Print> prints(n);
     std::vector<std::uint8_t> valid(n, 0);
     std::vector<double> inside(n, 0.0);
+    const NegExpTable& ex = neg_exp();
     // Per splat: support, inverse covariance, normalisation over the whole support.
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t k = r.begin(); k != r.end(); ++k) {
@@ -139,7 +163,7 @@ SplatStats draw_elliptic(const std::vector<EllipticSplat>& splats, Image& target
             const glm::dvec2 c(s.pixel);
             for (int j = p.y0; j <= p.y1; ++j) {
                 const bool row_in = j >= 0 && j < H;
-                row_weights(p, c, j, [&](int i, double w) {
+                row_weights(p, c, j, ex, [&](int i, double w) {
                     sum += w;
                     if (row_in && i >= 0 && i < W) in += w;
                 });
@@ -186,7 +210,7 @@ SplatStats draw_elliptic(const std::vector<EllipticSplat>& splats, Image& target
                 const glm::dvec2 c(splats[k].pixel);
                 for (int j = std::max(p.y0, r0); j <= std::min(p.y1, r1); ++j) {
                     float* row = &target.at(0, j);
-                    row_weights(p, c, j, [&](int i, double w) {
+                    row_weights(p, c, j, ex, [&](int i, double w) {
                         if (i >= 0 && i < W) row[i] += static_cast<float>(p.scale * w);
                     });
                 }
