@@ -220,13 +220,13 @@ SplatStats draw_elliptic(const std::vector<EllipticSplat>& splats, Image& target
         for (int b = r.begin(); b != r.end(); ++b) {
             const int r0 = b * kBandRows, r1 = std::min(H, r0 + kBandRows) - 1;
             for (std::uint32_t k : in_band[static_cast<std::size_t>(b)]) {
-                const Print& p = prints[k];
+                Print p = prints[k];   // its columns clipped to the image: the same weights, fewer texels
+                p.x0 = std::max(p.x0, 0), p.x1 = std::min(p.x1, W - 1);
                 const glm::dvec2 c(splats[k].pixel);
+                const double scale = p.scale;
                 for (int j = std::max(p.y0, r0); j <= std::min(p.y1, r1); ++j) {
                     float* row = &target.at(0, j);
-                    row_weights(p, c, j, ex, [&](int i, double w) {
-                        if (i >= 0 && i < W) row[i] += static_cast<float>(p.scale * w);
-                    });
+                    row_weights(p, c, j, ex, [&](int i, double w) { row[i] += static_cast<float>(scale * w); });
                 }
             }
         }
