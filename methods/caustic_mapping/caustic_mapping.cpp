@@ -21,6 +21,7 @@
 #include <tbb/combinable.h>
 #include <tbb/parallel_for.h>
 
+#include "elliptic_splats.hpp"
 #include "lookup.hpp"
 #include "splats.hpp"
 #include "timing.hpp"
@@ -31,7 +32,7 @@ void Counters::add(const Counters& o) {
     covered += o.covered, grazing += o.grazing, null_value += o.null_value, null_exit += o.null_exit;
     not_converged += o.not_converged, oscillating += o.oscillating, bisection += o.bisection;
     bad_derivative += o.bad_derivative, tir += o.tir, nonfinite += o.nonfinite, lookups += o.lookups;
-    lost_outside += o.lost_outside;
+    lost_outside += o.lost_outside, missed += o.missed;
 }
 
 namespace {
@@ -64,6 +65,7 @@ public:
         frame_index_ = frame.frame;
     }
     CausticOutput render(const FrameGeometry& frame, const RenderRequest& request) override;
+    AccuracyClaim accuracy_claim(const FrameGeometry& frame) const override { return claim_for(frame, s_); }
 
 private:
     void draw_gbuffers(const FrameGeometry& frame, const Light& light, Counters& c, std::int64_t& clipped);
@@ -83,6 +85,7 @@ private:
     SplatRaster splatter_;
     std::vector<FaceSplat> landing_;   // per grid texel: where its light lands (value 0: nowhere)
     std::vector<std::vector<Splat>> face_splats_;
+    std::vector<std::vector<EllipticSplat>> face_ellipses_;
     std::vector<Image> caustic_;    // per face: flux per texel [W]
     double radius_used_ = 0.0;
     ReceiverScratch receiver_scratch_;   // refilled by every render
@@ -145,21 +148,25 @@ void CausticMapping::draw_gbuffers(const FrameGeometry& frame, const Light& ligh
         back_tex_.cube = false;
         back_tex_.bilinear = s_.bilinear;
     }
-    // Receivers' positions texture: one frustum or a cube map.
+    // Receivers' positions texture: one frustum or a cube map. Its window covers the receivers (with room
+    // for the extrapolated rim) and also the specular objects seen from the light: the estimator's first
+    // lookup is the light ray through the specular vertex itself (d = 0) and its later lookups move along
+    // the refracted ray towards the landing point, so under tilted light they fall beside the receivers
+    // by the refracted ray's displacement. A window fitted to the receivers alone returns the null value
+    // there and the light that lands near the downstream edge is lost (Sec. III.D's null-value case).
     receivers_.bilinear = s_.bilinear;
     receivers_.faces.clear();
-    // Room for the extrapolated rim inside the frustum (a margin of `extend` texels per side).
-    const int extend = std::min(s_.extend, s_.map / 8);   // at most an eighth of the map per side
-    const double margin = std::max(0.01, extend / static_cast<double>(s_.map - 2 * extend));
+    const int rim = s_.extend < 0 ? kRimTexels : std::min(s_.extend, s_.map / 8);   // at most an eighth of the map
+    const double margin = std::max(0.01, rim / static_cast<double>(s_.map - 2 * rim));
     if (!point) {
-        receivers_.faces.push_back(fit_orthographic(light.direction, recv, s_.map, s_.map, margin));
+        receivers_.faces.push_back(receivers_view(light.direction, recv, spec, s_.map, margin));
         receivers_.cube = false;
     } else {
         // off: one frustum, clamped to 80 degrees off-axis (receivers beyond it get no caustic: counted).
         LightProjection single;
         const bool fits = s_.cube != CubeMode::On &&
-                          fit_perspective(light.position, recv, s_.map, s_.map, single, s_.cube == CubeMode::Off ? 80.0 : 60.0,
-                                          margin, s_.cube == CubeMode::Off);
+                          receivers_view(light.position, recv, spec, s_.map, s_.cube == CubeMode::Off ? 80.0 : 60.0,
+                                         margin, s_.cube == CubeMode::Off, single);
         receivers_.cube = !fits;
         if (fits) receivers_.faces.push_back(single);
         else for (const LightProjection& f : cube_faces(light.position, s_.map)) receivers_.faces.push_back(f);
@@ -171,7 +178,7 @@ void CausticMapping::draw_gbuffers(const FrameGeometry& frame, const Light& ligh
             if (b.role == Role::Receiver)
                 clipped += raster_.draw(receivers_.faces[f], b.triangles(), CullMode::None, DepthTest::Less,
                                         receivers_.maps[f]).clipped;
-        extend_positions(receivers_.maps[f], extend);
+        extend_positions(receivers_.maps[f], s_.extend < 0 ? s_.map : std::min(s_.extend, s_.map / 8));
     }
     (void)frame;
     (void)c;
@@ -266,6 +273,15 @@ void CausticMapping::trace(const Scene& scene, const Light& light, Counters& tot
                 c.oscillating += e.oscillating, c.bisection += e.bisected, c.bad_derivative += e.bad_derivative;
                 c.not_converged += e.hit && !e.converged;
                 if (!e.hit) {
+                    // A null value outside the receivers' window: the window holds every receiver's
+                    // rectangle, so no light ray through the estimate meets a receiver; the light leaves
+                    // past the receivers' edges (as the exact mapping's rays beyond the floor do), which is
+                    // not a failure of the estimator. Inside the window a null value is a hole: lost.
+                    Texel where;
+                    if (e.null_value && !receivers_.locate(origin + e.d * dir, where)) {
+                        ++c.missed;
+                        continue;
+                    }
                     c.null_value += e.null_value;
                     c.nonfinite += e.nonfinite;
                     continue;
@@ -277,6 +293,12 @@ void CausticMapping::trace(const Scene& scene, const Light& light, Counters& tot
                 if (!receivers_.locate(e.point, t)) {
                     ++c.lost_outside;
                     continue;
+                }
+                {   // Landed on the extrapolated rim, off every receiver: counted, and still splatted so
+                    // that the footprints of the light landing just inside an edge stay whole.
+                    const GBuffer& rg = receivers_.maps[static_cast<std::size_t>(t.face)];
+                    const int tx = std::min(static_cast<int>(t.px), rg.width - 1), ty = std::min(static_cast<int>(t.py), rg.height - 1);
+                    if (rg.id[rg.index(tx, ty)] == kExtended) ++c.missed;
                 }
                 const float value = static_cast<float>(flux * weight);
                 if (!std::isfinite(value)) {
@@ -316,14 +338,21 @@ CausticOutput CausticMapping::render(const FrameGeometry& frame, const RenderReq
     const double ratio = std::sqrt(object_view_.texel_area() / receivers_.faces[0].texel_area());
     radius_used_ = s_.splat_radius > 0.0 ? s_.splat_radius : 2.5 * ratio;
     if (s_.adaptive) radius_used_ = s_.splat_radius > 0.0 ? s_.splat_radius : 1.0;   // the adaptive minimum
-    const int isolated_splats = build_splats(landing_, s_.grid, s_.adaptive ? FootprintMode::Adaptive : FootprintMode::Fixed,
-                 static_cast<float>(radius_used_), face_splats_);
+    int isolated_splats = 0;
+    if (s_.elliptic) {
+        face_ellipses_.resize(faces);
+        isolated_splats = build_elliptic_splats(landing_, s_.grid, static_cast<float>(radius_used_), face_ellipses_);
+    } else {
+        isolated_splats = build_splats(landing_, s_.grid, s_.adaptive ? FootprintMode::Adaptive : FootprintMode::Fixed,
+                                       static_cast<float>(radius_used_), face_splats_);
+    }
     caustic_.resize(faces);
     SplatStats splat_stats;
     for (std::size_t f = 0; f < faces; ++f) {
         if (caustic_[f].width != s_.map || caustic_[f].height != s_.map) caustic_[f] = Image(s_.map, s_.map);
         else std::fill(caustic_[f].pixels.begin(), caustic_[f].pixels.end(), 0.0f);
-        const SplatStats st = splatter_.draw(face_splats_[f], s_.splat, radius_used_, caustic_[f]);
+        const SplatStats st = s_.elliptic ? draw_elliptic(face_ellipses_[f], caustic_[f])
+                                          : splatter_.draw(face_splats_[f], s_.splat, radius_used_, caustic_[f]);
         splat_stats.splatted += st.splatted, splat_stats.outside += st.outside, splat_stats.nonfinite += st.nonfinite;
         if (s_.lowpass >= 1.0) gaussian_lowpass(caustic_[f], s_.lowpass);
     }
@@ -352,6 +381,9 @@ CausticOutput CausticMapping::render(const FrameGeometry& frame, const RenderReq
     h.add("null_value", c.null_value);
     h.add("null_exit", c.null_exit);
     h.add("lost_samples", c.null_value + c.null_exit + c.tir + c.grazing + c.lost_outside + splat_stats.outside);
+    // Light that lands off every receiver (beyond the window, or on the extrapolated rim): not lost, there
+    // is no receiver there.
+    h.add("missed_receivers", c.missed);
     h.add("not_converged", c.not_converged);
     h.add("oscillating", c.oscillating);
     h.add("bisection_fallbacks", c.bisection);

@@ -17,6 +17,9 @@ namespace caustics::caustic_mapping {
 enum class FluxWeight { Radiometric, Paper };
 enum class CubeMode { Auto, Off, On };
 
+constexpr int kMapPerGrid = 6;      // map = 0 (auto): caustic-map texels per grid vertex
+constexpr int kMinAutoMap = 768, kMaxAutoMap = 4096;
+
 struct Settings {
     int grid = 128;
     int map = 768;
@@ -24,12 +27,13 @@ struct Settings {
     FluxWeight flux = FluxWeight::Radiometric;
     SplatKernel splat = SplatKernel::Gaussian;
     bool adaptive = true;          // per-splat radius from the neighbours' landing spacing (splats.hpp)
+    bool elliptic = true;          // per-splat covariance from the landing map's Jacobian (elliptic_splats.hpp)
     double splat_radius = 0.0;   // texels; 0: auto (gaussian: 2.5 grid spacings; adaptive: minimum 1)
     double lowpass = 0.0;        // texels; 0: off
     CubeMode cube = CubeMode::Auto;
     bool bilinear = true;
     int bin_samples = 0;           // receiver map: n x n lookups per bin; 0: auto (texels per bin side)
-    int extend = 32;               // texels the receivers' positions are extrapolated past their edges
+    int extend = -1;               // texels the receivers' positions are extrapolated past their edges; -1: all
     bool absorption = true;
     double depth_bias = 1.0;
     bool debug_maps = false;
@@ -38,11 +42,21 @@ struct Settings {
 // Per-render health, summed over threads.
 struct Counters {
     std::int64_t covered = 0, grazing = 0, null_value = 0, null_exit = 0, not_converged = 0, oscillating = 0,
-                 bisection = 0, bad_derivative = 0, tir = 0, nonfinite = 0, lookups = 0, lost_outside = 0;
+                 bisection = 0, bad_derivative = 0, tir = 0, nonfinite = 0, lookups = 0, lost_outside = 0,
+                 missed = 0;
     void add(const Counters& o);
 };
 
 Settings settings_from(const ParamSet& p);
+
+// The claimed regime (Method::accuracy_claim), measured on the sine cases at the default map (README.md):
+// water (a dielectric height field) under one light at most kMaxTiltDeg from the vertical and grid >=
+// kMinGrid: nrmse <= kBeforeFocusFactor x the flat baseline's where the receiver lies above the paraxial
+// first focus, kPastFocusFactor past it (folds). Receivers at less than kMinContrast of the focal depth
+// (ior 1, flat water) see no caustic: the flat baseline is exact and the claim is flatness instead.
+constexpr double kMaxTiltDeg = 45.0, kMinContrast = 0.05, kBeforeFocusFactor = 0.15, kPastFocusFactor = 0.5;
+constexpr int kMinGrid = 64;
+AccuracyClaim claim_for(const FrameGeometry& frame, const Settings& s);
 MethodInfo caustic_mapping_info();
 std::unique_ptr<Method> make_caustic_mapping(const ParamSet& p);
 

@@ -14,11 +14,11 @@
 // check the sign of Newton's derivative.
 //
 //   approx   d_{k+1} = |fetch(v + d_k r) - v| (the paper's estimator, started from d0 = 1 in the paper)
-//   newton   d_{k+1} = d_k - f(d_k) / f'(d_k), f' by a forward difference of step eps (appendix; two
-//            lookups per iteration). A derivative that is zero, not finite, or of the wrong sign for
-//            the side the estimate is on (it would step away from the surface), and a step to d <= 0,
-//            fall back to the approx step for that iteration (counted in bad_derivative); nothing
-//            divides by zero.
+//   newton   d_{k+1} = d_k - g(d_k) / g'(d_k), g = sign(side) f the signed form of the paper's f (the
+//            same step away from the surface, smooth through it), g' by a forward difference of step eps
+//            (appendix; two lookups per iteration). A derivative that is not positive (it would step
+//            away from the surface) or not finite, and a step to d <= 0, fall back to the approx step for
+//            that iteration (counted in bad_derivative); nothing divides by zero.
 //   oscillation  the last two steps have opposite signs and the second is not at least halved (a
 //            two-cycle, Sec. III.D). With safeguard=bisection and a sign change of side() between a
 //            point in front and one behind, the estimate switches to bisection on that bracket for the
@@ -95,19 +95,24 @@ EstimateResult estimate_intersection(const Lookup& tex, const glm::dvec3& v, con
         const double approx_next = glm::length(q - v);
         double next = approx_next;
         if (s.kind == EstimatorKind::Newton) {
-            const double f = glm::length(q - p);
+            // Newton on the signed distance g(d) = sign(side) f(d): the same iteration as on the paper's
+            // f away from the surface (g = -f in front, +f behind), but g is smooth through the root,
+            // where f has a kink. A forward difference taken on f across the root (d < d* < d + eps, the
+            // estimate once it has converged to within eps) gives a slope of the wrong sign and used to
+            // be discarded as a bad derivative on every converged ray; on g it is the true slope.
+            auto sgn = [](double x) { return x < 0.0 ? -1.0 : 1.0; };
+            const double g = sgn(side) * glm::length(q - p);
             glm::dvec3 q2;
             double side2 = 0.0;
             bool ok = eval(d + s.eps, q2, side2);
             double deriv = 0.0;
             if (ok) {
-                deriv = (glm::length(q2 - (p + s.eps * r)) - f) / s.eps;
-                // In front (side < 0) f must fall as d grows, behind it must rise; at f = 0 any is fine.
-                const bool wrong_sign = (side < 0.0 && deriv >= 0.0) || (side > 0.0 && deriv <= 0.0);
-                ok = std::isfinite(deriv) && std::abs(deriv) > 1e-12 && !wrong_sign;
+                deriv = (sgn(side2) * glm::length(q2 - (p + s.eps * r)) - g) / s.eps;
+                // The ray passes from in front of the surface (g < 0) to behind it (g > 0): g must rise.
+                ok = std::isfinite(deriv) && deriv > 1e-12;
             }
             if (ok) {
-                next = d - f / deriv;
+                next = d - g / deriv;
                 if (!(next > 0.0) || !std::isfinite(next)) ok = false;
             }
             if (!ok) {

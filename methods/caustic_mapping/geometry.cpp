@@ -91,4 +91,36 @@ std::vector<Batch> build_batches(const FrameGeometry& frame, int grid) {
     return batches;
 }
 
+LightProjection receivers_view(const glm::dvec3& light_dir, const Bounds3& receivers, const Bounds3& specular, int map,
+                               double margin) {
+    Bounds3 both = receivers;
+    if (specular.valid()) both.extend(specular);
+    // The union's view places the eye in front of both; its rectangle is then narrowed to the two
+    // objects' rectangles (the union box's corners would widen it under tilted light).
+    LightProjection p = fit_orthographic(light_dir, both, map, map, margin);
+    if (!specular.valid()) return p;
+    double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
+    for (const Bounds3* b : {&receivers, &specular}) {
+        double xl = 1e300, xh = -1e300, yl = 1e300, yh = -1e300;
+        for (int k = 0; k < 8; ++k) {
+            const glm::dvec3 v = p.view({(k & 1) ? b->hi.x : b->lo.x, (k & 2) ? b->hi.y : b->lo.y, (k & 4) ? b->hi.z : b->lo.z});
+            xl = std::min(xl, v.x), xh = std::max(xh, v.x), yl = std::min(yl, v.y), yh = std::max(yh, v.y);
+        }
+        const double mx = std::max(margin * (xh - xl), 1e-6), my = std::max(margin * (yh - yl), 1e-6);
+        x0 = std::min(x0, xl - mx), x1 = std::max(x1, xh + mx), y0 = std::min(y0, yl - my), y1 = std::max(y1, yh + my);
+    }
+    p.x0 = x0, p.x1 = x1, p.y0 = y0, p.y1 = y1;
+    return p;
+}
+
+bool receivers_view(const glm::dvec3& eye, const Bounds3& receivers, const Bounds3& specular, int map,
+                    double max_half_angle_deg, double margin, bool clamp, LightProjection& out) {
+    if (specular.valid()) {
+        Bounds3 both = receivers;
+        both.extend(specular);
+        if (fit_perspective(eye, both, map, map, out, max_half_angle_deg, margin, false)) return true;
+    }
+    return fit_perspective(eye, receivers, map, map, out, max_half_angle_deg, margin, clamp);
+}
+
 }  // namespace caustics::caustic_mapping

@@ -9,6 +9,7 @@
 
 #include "frame.hpp"
 #include "gbuffer_raster.hpp"
+#include "light_projection.hpp"
 
 namespace caustics::caustic_mapping {
 
@@ -33,5 +34,19 @@ TriangleMesh tessellate_sphere(const glm::dvec3& center, double radius, int slic
 TriangleMesh resample_heightfield(const HeightField& hf, int n);
 // One batch per object of the frame. `grid` sets the tessellation of spheres and height fields.
 std::vector<Batch> build_batches(const FrameGeometry& frame, int grid);
+
+// The receivers' positions texture's window seen from the light: the receivers' rectangle with a margin
+// (room for the extrapolated rim) and the specular objects' rectangle, so that every lookup of the
+// receiver estimator, from the light ray through the specular vertex to the landing point, reads a
+// stored or extrapolated position. Directional light: the bounding rectangle of the two rectangles in
+// one orthographic view. Point light: one frustum fitted to both (as fit_perspective, the same limits),
+// else, when the union does not fit, to the receivers alone (false: neither fits, use a cube map).
+LightProjection receivers_view(const glm::dvec3& light_dir, const Bounds3& receivers, const Bounds3& specular, int map,
+                               double margin);
+bool receivers_view(const glm::dvec3& eye, const Bounds3& receivers, const Bounds3& specular, int map,
+                    double max_half_angle_deg, double margin, bool clamp, LightProjection& out);
+
+// The rim of extrapolated texels the receivers' window leaves room for with extend = -1 (auto).
+constexpr int kRimTexels = 32;
 
 }  // namespace caustics::caustic_mapping

@@ -1,0 +1,49 @@
+#pragma once
+// caustic_mapping: anisotropic (elliptical) Gaussian splats whose covariance follows the landing map
+// (splat=elliptic, the default; not in the paper, whose splats are points of a fixed size).
+//
+// The grid's texels land on the receiver through the Snell map; around texel (x, y) their landing points
+// form a lattice x J (i, j), J the Jacobian of the landing map in caustic-map texels per grid texel
+// (central differences of the neighbours' landing points). A Gaussian of covariance
+//     Sigma = s^2 J J^T + sigma0^2 I,    s = kEllipticSigma grid spacings,
+// is an isotropic Gaussian of s grid spacings pulled through the landing map: it reconstructs the
+// lattice's flux density without ripple (the lattice's first harmonic is damped by exp(-2 pi^2 s^2),
+// 7e-3 at s = 0.5: ior = 1 stays flat) and without blurring it across the direction where the lattice
+// is compressed. An isotropic footprint sized by the larger spacing (splat=adaptive) spreads a focused
+// caustic line over the other spacing: under tilted light or near a focus the line's peak is cut by
+// tens of percent. Each splat's flux is kept (weights normalised over its whole footprint); past the
+// first focus several texels land on one point (folds), and their splats simply add, which is the
+// sum over preimages of the flux-conservation form of the caustic. sigma0 keeps a footprint of at
+// least about one caustic-map texel where J is singular (on a fold).
+#include <cstdint>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "image.hpp"
+#include "splat.hpp"
+#include "splats.hpp"
+
+namespace caustics::caustic_mapping {
+
+constexpr float kEllipticSigma = 0.5f;   // grid spacings (kAdaptiveScale / 3.5 of the isotropic footprint)
+constexpr float kEllipticCutoff = 3.5f;  // support: the ellipse of 3.5 standard deviations
+
+struct EllipticSplat {
+    glm::vec2 pixel;       // continuous caustic-map coordinates
+    float value;           // flux
+    glm::vec3 cov;         // covariance (xx, xy, yy) [texels^2]
+};
+
+// The splats of the grid x grid landing points, per face (cleared first). Where a texel lacks a
+// landed grid neighbour along an axis, the footprint falls back to the isotropic one of splats.hpp
+// (the larger spacing from the diagonals or the nearest ring). min_radius: sigma0 = min_radius / 3.5
+// [texels]. Returns the number of splats with no landed neighbour at all (kept at sigma0).
+int build_elliptic_splats(const std::vector<FaceSplat>& landing, int grid, float min_radius,
+                          std::vector<std::vector<EllipticSplat>>& per_face);
+
+// Adds the splats to `target`, each normalised over its whole footprint (the part outside the image is
+// reported, not renormalised). Deterministic for any thread count (bands of rows, splats in order).
+SplatStats draw_elliptic(const std::vector<EllipticSplat>& splats, Image& target);
+
+}  // namespace caustics::caustic_mapping
