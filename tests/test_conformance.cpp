@@ -2,7 +2,7 @@
 // judged against the exact closed form of the case (harness/analytic_truth.hpp), in the manner of
 // pbrt-v4's integrator x analytic-scene tests. A method added later is in the suite without editing it.
 //
-// Per method and case, at the method's default parameters on a 128 x 128 receiver (the no-caustic
+// Per method and case, at the method's default parameters on the scene's receiver (256 x 256; the no-caustic
 // baseline is the flat interface's irradiance for water, the best constant for a solid refractor):
 //   - capabilities() may refuse the case, with a reason; nothing else is then asked;
 //   - the output is finite, and bitwise identical for 1 and 2 threads and across repeated renders;
@@ -36,8 +36,6 @@ namespace {
 
 using test_support::ConformanceCase;
 using test_support::conformance_cases;
-
-constexpr int kBins = 128;
 
 struct Row {
     std::string method, test_case, claim;
@@ -168,7 +166,7 @@ TEST_P(Conformance, MeetsItsClaimOnTheAnalyticCase) {
         }
     }
     const FrameGeometry frame = build_frame_geometry(scene, 0);
-    const ReceiverChart chart(frame, kBins, kBins);
+    const ReceiverChart chart(frame, scene.receiver.width, scene.receiver.height);
     const AnalyticTruth truth = analytic_truth(frame, chart);
     ASSERT_TRUE(truth.available) << case_name << ": " << truth.reason;
     if (tc.flat_truth) {
@@ -181,8 +179,8 @@ TEST_P(Conformance, MeetsItsClaimOnTheAnalyticCase) {
     const std::vector<Rendered> one = render(info, {}, scene, frame, chart, 1, 2);
     const std::vector<Rendered> two = render(info, {}, scene, frame, chart, 2, 1);
     const Image& m = one[0].out.receiver;
-    ASSERT_EQ(m.width, kBins);
-    ASSERT_EQ(m.height, kBins);
+    ASSERT_EQ(m.width, chart.width());
+    ASSERT_EQ(m.height, chart.height());
     EXPECT_EQ(nonfinite(m), 0) << "non-finite receiver values";
     EXPECT_TRUE(identical(m, one[1].out.receiver)) << "a repeated render of the same frame differs";
     EXPECT_TRUE(identical(m, two[0].out.receiver)) << "the output differs between 1 and 2 threads";

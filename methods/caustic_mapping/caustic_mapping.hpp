@@ -52,9 +52,8 @@ Settings settings_from(const ParamSet& p);
 // The claimed regime (Method::accuracy_claim), measured on the sine cases at the default map (README.md):
 // water (a dielectric height field) under one light at most kMaxTiltDeg from the vertical and grid >=
 // kMinGrid: nrmse <= kBeforeFocusFactor x the flat baseline's where the receiver lies above the paraxial
-// first focus, kPastFocusFactor past it (folds). Receivers at less than kMinContrast of the focal depth
-// (ior 1, flat water) see no caustic: the flat baseline is exact and the claim is flatness instead.
-constexpr double kMaxTiltDeg = 45.0, kMinContrast = 0.05, kBeforeFocusFactor = 0.15, kPastFocusFactor = 0.5;
+// first focus, kPastFocusFactor past it (folds).
+constexpr double kMaxTiltDeg = 45.0, kBeforeFocusFactor = 0.15, kPastFocusFactor = 0.5;
 constexpr int kMinGrid = 64;
 AccuracyClaim claim_for(const FrameGeometry& frame, const Settings& s);
 MethodInfo caustic_mapping_info();
