@@ -402,7 +402,7 @@ TEST(WaveMethod, HardCasesStayFinite) {
 }
 
 TEST(WaveMethod, ArrivalStopKeepsTheDirectFrontOnAFlatInterface) {
-    // d'Alembert: the flat Gaussian sheet (init=smooth) splits into two half pulses; the downward one
+    // The paper's launch (launch=paper, output=sum). d'Alembert: the flat Gaussian sheet (init=smooth) splits into two half pulses; the downward one
     // (area sqrt(2 pi) / 2 per column) passes at courant cells per step, so once it has passed a cell (margin 6: the sheet's
     // half-width and the scheme's dispersive tail) the cell's sum is sqrt(2 pi) / (2 courant), at every
     // depth. At the default margin (3) the floor is uniform. stop=epsilon sums to the harmonic limit instead.
@@ -421,18 +421,18 @@ TEST(WaveMethod, ArrivalStopKeepsTheDirectFrontOnAFlatInterface) {
             for (int x = w / 3; x < 2 * w / 3; ++x) v.push_back(out.receiver.pixels[y * w + x]);
         return v;
     };
-    const CausticOutput passed = render(scene, {{"grid", "32"}, {"normalize", "raw"}, {"init", "smooth"}, {"margin", "6"}}, "flat, margin 6");
+    const CausticOutput passed = render(scene, {{"grid", "32"}, {"normalize", "raw"}, {"launch", "paper"}, {"output", "sum"}, {"init", "smooth"}, {"margin", "6"}}, "flat, margin 6");
     for (float v : middle(passed)) EXPECT_NEAR(v, expected, 0.02 * expected);
-    const CausticOutput standard = render(scene, {{"grid", "32"}, {"normalize", "raw"}, {"init", "smooth"}}, "flat, margin 3");
+    const CausticOutput standard = render(scene, {{"grid", "32"}, {"normalize", "raw"}, {"launch", "paper"}, {"output", "sum"}, {"init", "smooth"}}, "flat, margin 3");
     const std::vector<float> floor = middle(standard);
     const auto [lo, hi] = std::minmax_element(floor.begin(), floor.end());
     EXPECT_LT(*hi - *lo, 0.01 * *hi);
     // The defaults (init=cells, margin 3): uniform too.
-    const std::vector<float> defaults = middle(render(scene, {{"grid", "32"}, {"normalize", "raw"}}, "flat, defaults"));
+    const std::vector<float> defaults = middle(render(scene, {{"grid", "32"}, {"normalize", "raw"}, {"launch", "paper"}, {"output", "sum"}}, "flat, defaults"));
     const auto [dlo, dhi] = std::minmax_element(defaults.begin(), defaults.end());
     EXPECT_GT(*dlo, 0.0f);
     EXPECT_LT(*dhi - *dlo, 0.01 * *dhi);
-    const CausticOutput converged = render(scene, {{"grid", "32"}, {"normalize", "raw"}, {"init", "smooth"}, {"stop", "epsilon"}}, "flat, epsilon");
+    const CausticOutput converged = render(scene, {{"grid", "32"}, {"normalize", "raw"}, {"launch", "paper"}, {"output", "sum"}, {"init", "smooth"}, {"stop", "epsilon"}}, "flat, epsilon");
     const std::size_t centre = passed.receiver.pixels.size() / 2 + passed.receiver.width / 2;
     std::printf("flat floor: margin 6 %.4f (expected %.4f), margin 3 %.4f, epsilon %.4f\n", passed.receiver.pixels[centre],
                 expected, standard.receiver.pixels[centre], converged.receiver.pixels[centre]);
@@ -442,9 +442,11 @@ TEST(WaveMethod, ArrivalStopKeepsTheDirectFrontOnAFlatInterface) {
 TEST(WaveMethod, FlatWaterUnderObliqueLight) {
     // Flat water, light tilted towards +x: the refracted light leaves a strip of width
     // depth * tan(theta_t) below the water's -x edge unlit; elsewhere a flat interface transmits the
-    // uniform irradiance E_flat. Mirror sides keep the texture laterally uniform, so every lit bin reads
-    // E_flat; the paper's damping band on the sides cuts the accumulated sheet off and darkens the bins
-    // near them.
+    // uniform irradiance E_flat. The paper's launch (all at once): mirror sides keep the texture
+    // laterally uniform, so every lit bin reads E_flat; the paper's damping band on the sides cuts the
+    // accumulated sheet off and darkens the bins near them. The phase-delayed launch (default, last):
+    // the refracted plane wave, uniform over the lit bins too (auto: a band with the soft-edged sheet
+    // upstream across x, mirror across y).
     WaterOverFloor d;
     d.light_direction = {0.5, 0.0, -1.0};
     d.floor_z = -0.4;
@@ -456,7 +458,8 @@ TEST(WaveMethod, FlatWaterUnderObliqueLight) {
     const double strip = 0.4 * sin_t / std::sqrt(1.0 - sin_t * sin_t);  // 0.143 m
     const double e_flat = flat_transmitted_irradiance(scene, d.ior, glm::dvec3(0, 0, 1));
     for (const std::string sides : {"mirror", "sponge"}) {
-        const CausticOutput out = test_support::render_method("wave_pde", scene, {{"grid", "32"}, {"sides", sides}}, 64, 64);
+        const CausticOutput out = test_support::render_method(
+            "wave_pde", scene, {{"grid", "32"}, {"sides", sides}, {"launch", "paper"}, {"output", "sum"}}, 64, 64);
         double lit_worst = 0.0, unlit_worst = 0.0;
         for (int j = 0; j < 64; ++j)
             for (int i = 0; i < 64; ++i) {
@@ -471,6 +474,23 @@ TEST(WaveMethod, FlatWaterUnderObliqueLight) {
         if (sides == "mirror") EXPECT_LT(lit_worst, 1e-3);
         else EXPECT_GT(lit_worst, 0.02);  // the band's edge darkening: 7 % at this depth (6 cells), more deeper
     }
+    const CausticOutput out = test_support::render_method("wave_pde", scene, {{"grid", "32"}}, 64, 64);
+    double lit_worst = 0.0, unlit_worst = 0.0;
+    for (int j = 0; j < 64; ++j)
+        for (int i = 0; i < 64; ++i) {
+            const double x = -1.0 + (i + 0.5) * 2.0 / 64;
+            const double v = out.receiver.at(i, j);
+            if (x < -1.0 + strip) unlit_worst = std::max(unlit_worst, std::fabs(v));
+            else lit_worst = std::max(lit_worst, std::fabs(v - e_flat) / e_flat);
+        }
+    std::printf("flat water, oblique light, phase delay: unlit strip max %.3g, lit bins worst relative error %.3g\n  row 32 / E_flat:",
+                unlit_worst, lit_worst);
+    for (int i = 0; i < 64; i += 2) std::printf(" %.3f", out.receiver.at(i, 32) / e_flat);
+    std::printf("\n  column 40 / E_flat:");
+    for (int j = 0; j < 64; j += 2) std::printf(" %.3f", out.receiver.at(40, j) / e_flat);
+    std::printf("\n");
+    EXPECT_EQ(unlit_worst, 0.0);
+    EXPECT_LT(lit_worst, 0.01);
 }
 
 TEST(WaveMethod, PeriodicSidesNeedATilingSurface) {
@@ -483,4 +503,67 @@ TEST(WaveMethod, PeriodicSidesNeedATilingSurface) {
     const Capability no = method->capabilities(sine);
     EXPECT_FALSE(no.supported);
     EXPECT_NE(no.reason.find("sides=periodic"), std::string::npos) << no.reason;
+}
+
+// ---- The phase-delayed launch (wave_launch.hpp) against the exact truth of the sine ----
+
+#include "sine_truth_support.hpp"
+
+namespace {
+
+struct SineRun {
+    std::vector<double> method, truth;  // column means over the receiver's x bins
+    double nrmse_fit = 0.0, baseline = 0.0, std_over_mean = 0.0;
+};
+
+// Renders a sine case with `params` and compares the receiver's column means with the analytic truth
+// (after the least-squares scale fit: the output is relative).
+SineRun run_sine(const test_support::SineSetup& c, const std::map<std::string, std::string>& params) {
+    using namespace test_support;
+    TracedScene setup(make_sine_scene(c));
+    const AnalyticTruth truth = analytic_truth(*setup.frame, *setup.chart);
+    const CausticOutput out = render_method("wave_pde", setup.scene, params, c.bins_x, c.bins_y);
+    SineRun r;
+    r.method = column_means(out.receiver);
+    r.truth = column_means(truth.receiver);
+    double mm = 0, mt = 0, tt = 0, mean_t = 0, mean_m = 0;
+    for (std::size_t i = 0; i < r.method.size(); ++i) {
+        mm += r.method[i] * r.method[i];
+        mt += r.method[i] * r.truth[i];
+        mean_t += r.truth[i];
+        mean_m += r.method[i];
+    }
+    mean_t /= r.truth.size();
+    mean_m /= r.method.size();
+    const double scale = mm > 0 ? mt / mm : 0.0;
+    double se = 0, sb = 0, sm = 0;
+    for (std::size_t i = 0; i < r.method.size(); ++i) {
+        se += std::pow(scale * r.method[i] - r.truth[i], 2);
+        sb += std::pow(mean_t - r.truth[i], 2);
+        sm += std::pow(r.method[i] - mean_m, 2);
+    }
+    r.nrmse_fit = std::sqrt(se / r.truth.size()) / mean_t;
+    r.baseline = std::sqrt(sb / r.truth.size()) / mean_t;
+    r.std_over_mean = std::sqrt(sm / r.method.size()) / mean_m;
+    (void)tt;
+    return r;
+}
+
+void print_columns(const char* what, const SineRun& r) {
+    std::printf("%s: nrmse_fit %.3f (flat %.3f), std/mean %.4f\n  method:", what, r.nrmse_fit, r.baseline, r.std_over_mean);
+    for (std::size_t i = 0; i < r.method.size(); i += 4) std::printf(" %.3f", r.method[i]);
+    std::printf("\n  truth: ");
+    for (std::size_t i = 0; i < r.truth.size(); i += 4) std::printf(" %.3f", r.truth[i]);
+    std::printf("\n");
+}
+
+}  // namespace
+
+TEST(WavePhaseDelay, IndexOneIsFlat) {
+    test_support::SineSetup c = test_support::sine_case(30.0, -0.4, 0.0, false);
+    c.ior = 1.0;
+    c = test_support::with_water_feeding_floor(c);
+    const SineRun r = run_sine(c, {{"grid", "64"}});
+    print_columns("ior 1, 30 deg, grid 64", r);
+    EXPECT_LT(r.std_over_mean, 0.01);
 }
