@@ -567,3 +567,131 @@ TEST(WavePhaseDelay, IndexOneIsFlat) {
     print_columns("ior 1, 30 deg, grid 64", r);
     EXPECT_LT(r.std_over_mean, 0.01);
 }
+
+namespace {
+
+// Pearson correlation of two profiles.
+double correlation(const std::vector<double>& a, const std::vector<double>& b) {
+    double ma = 0, mb = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) ma += a[i], mb += b[i];
+    ma /= a.size();
+    mb /= b.size();
+    double ab = 0, aa = 0, bb = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+        ab += (a[i] - ma) * (b[i] - mb);
+        aa += (a[i] - ma) * (a[i] - ma);
+        bb += (b[i] - mb) * (b[i] - mb);
+    }
+    return aa > 0 && bb > 0 ? ab / std::sqrt(aa * bb) : 0.0;
+}
+
+// A long sine (0.5 m) over a shallow floor (0.2 m): the grid-32 pulse's Fresnel width stays well
+// below the period, so the wave's map follows the geometric one (diffraction aside).
+test_support::SineSetup long_sine(double amplitude, double ior) {
+    test_support::SineSetup c;
+    c.amplitude = amplitude;
+    c.wavelength = 0.5;
+    c.floor_z = -0.2;
+    c.ior = ior;
+    return test_support::with_water_feeding_floor(c);
+}
+
+}  // namespace
+
+TEST(WavePhaseDelay, SubCellSurfaceShapesTheMap) {
+    // Amplitude 3 mm, a tenth of a grid-32 cell (31 mm): the paper's launch puts every interface cell
+    // in one layer and its map is flat; the phase-delayed launch carries the height in its phase.
+    const test_support::SineSetup c = long_sine(0.003, 1.33);
+    const SineRun wave = run_sine(c, {{"grid", "32"}});
+    const SineRun paper = run_sine(c, {{"grid", "32"}, {"launch", "paper"}, {"output", "sum"}});
+    print_columns("amplitude 0.1 cell, phase delay", wave);
+    print_columns("amplitude 0.1 cell, paper", paper);
+    const double truth_contrast = [&] {
+        SineRun t = wave;
+        t.method = t.truth;
+        double m = 0, v = 0;
+        for (double x : t.truth) m += x;
+        m /= t.truth.size();
+        for (double x : t.truth) v += (x - m) * (x - m);
+        return std::sqrt(v / t.truth.size()) / m;
+    }();
+    std::printf("truth std/mean %.4f, correlation with the truth: phase delay %.3f, paper %.3f\n", truth_contrast,
+                correlation(wave.method, wave.truth), correlation(paper.method, paper.truth));
+    EXPECT_GT(correlation(wave.method, wave.truth), 0.9);
+    EXPECT_GT(wave.std_over_mean, 0.5 * truth_contrast);
+    EXPECT_LT(wave.nrmse_fit, 0.5 * wave.baseline);
+    EXPECT_LT(paper.std_over_mean, 0.1 * truth_contrast);  // the paper's launch: no pattern
+}
+
+TEST(WavePhaseDelay, OutputDependsOnTheIndex) {
+    // The focal depth n / ((n - 1) A k^2) shrinks with n, so the floor's contrast grows: the maps at
+    // n = 1.0, 1.33, 1.5 differ, each following its own truth. The paper's launch ignores n.
+    const std::map<std::string, std::string> wave_params{{"grid", "32"}};
+    const SineRun n1 = run_sine(long_sine(0.01, 1.0), wave_params);
+    const SineRun n133 = run_sine(long_sine(0.01, 1.33), wave_params);
+    const SineRun n15 = run_sine(long_sine(0.01, 1.5), wave_params);
+    print_columns("n 1.33", n133);
+    std::printf("std/mean: n 1.0 %.4f, 1.33 %.4f (truth %.4f), 1.5 %.4f; nrmse_fit 1.33 %.3f (flat %.3f), 1.5 %.3f (flat %.3f)\n",
+                n1.std_over_mean, n133.std_over_mean, n133.baseline, n15.std_over_mean, n133.nrmse_fit, n133.baseline,
+                n15.nrmse_fit, n15.baseline);
+    EXPECT_LT(n1.std_over_mean, 0.01);
+    EXPECT_GT(n133.std_over_mean, 0.5 * n133.baseline);
+    EXPECT_GT(n15.std_over_mean, 1.2 * n133.std_over_mean);
+    EXPECT_LT(n133.nrmse_fit, 0.5 * n133.baseline);
+    EXPECT_LT(n15.nrmse_fit, 0.5 * n15.baseline);
+    const std::map<std::string, std::string> paper_params{{"grid", "32"}, {"launch", "paper"}, {"output", "sum"}};
+    const SineRun p1 = run_sine(long_sine(0.01, 1.0), paper_params), p133 = run_sine(long_sine(0.01, 1.33), paper_params);
+    std::printf("paper launch std/mean: n 1.0 %.4f, 1.33 %.4f\n", p1.std_over_mean, p133.std_over_mean);
+    // The paper's launch: the same map up to scale at both indices (here flat: the 1 cm waves are a
+    // third of a cell, inside one layer of interface cells).
+    EXPECT_NEAR(p1.std_over_mean, p133.std_over_mean, 1e-6);
+}
+
+namespace {
+
+AccuracyClaim claim_for(const Scene& scene, const std::map<std::string, std::string>& params) {
+    const MethodInfo& info = require_method("wave_pde");
+    std::unique_ptr<Method> method = info.create(ParamSet::resolve(info.name, info.params, params));
+    const FrameGeometry frame = build_frame_geometry(scene, 0);
+    method->prepare(scene);
+    method->update(frame);
+    return method->accuracy_claim(frame);
+}
+
+}  // namespace
+
+TEST(WavePhaseDelay, AccuracyClaimStatesItsBounds) {
+    using test_support::make_sine_scene;
+    // Inside: the long sine at grid 32 (Fresnel ratio 0.24, floor at 0.08 of the focal depth), and
+    // the error there is within the claimed factor of the flat baseline's.
+    const test_support::SineSetup inside_case = long_sine(0.01, 1.33);
+    const AccuracyClaim inside = claim_for(make_sine_scene(inside_case), {{"grid", "32"}});
+    EXPECT_TRUE(inside.inside) << inside.reason;
+    const SineRun run = run_sine(inside_case, {{"grid", "32"}});
+    EXPECT_LE(run.nrmse_fit, inside.error_vs_baseline * run.baseline);
+    // Outside: the 0.25 m sine over a floor 1.2 m down, past the first focus (0.64 m).
+    const AccuracyClaim deep = claim_for(make_sine_scene(test_support::sine_case(0.0, -1.2, 0.5, false)), {{"grid", "32"}});
+    EXPECT_FALSE(deep.inside);
+    EXPECT_NE(deep.reason.find("first focus at 0.6"), std::string::npos) << deep.reason;
+    // Outside: the 0.25 m sine at 0.4 m on a grid-32 texture (its pulse's wavelength is 0.29 m).
+    const AccuracyClaim coarse = claim_for(make_sine_scene(test_support::sine_case(0.0, -0.4, 0.0, false)), {{"grid", "32"}});
+    EXPECT_FALSE(coarse.inside);
+    EXPECT_NE(coarse.reason.find("lambda L / l^2 = "), std::string::npos) << coarse.reason;
+    // The paper's launch claims nothing.
+    const AccuracyClaim paper = claim_for(make_sine_scene(inside_case), {{"grid", "32"}, {"launch", "paper"}, {"output", "sum"}});
+    EXPECT_FALSE(paper.inside);
+    std::printf("inside: factor %.2f (measured %.3f); outside: %s; %s; %s\n", inside.error_vs_baseline,
+                run.nrmse_fit / run.baseline, deep.reason.c_str(), coarse.reason.c_str(), paper.reason.c_str());
+}
+
+TEST(WavePhaseDelay, ResultDoesNotDependOnThreadCount) {
+    // The launch's injection is serial and the flux window a per-cell select: the same texture with 1
+    // and 2 threads, under oblique light (banded, padded x faces).
+    test_support::SineSetup c = test_support::sine_case(30.0, -0.4, 0.0, false);
+    const Scene scene = test_support::make_sine_scene(c);
+    CausticOutput one, two;
+    tbb::task_arena(1).execute([&] { one = test_support::render_method("wave_pde", scene, {{"grid", "24"}}, 32, 4); });
+    tbb::task_arena(2).execute([&] { two = test_support::render_method("wave_pde", scene, {{"grid", "24"}}, 32, 4); });
+    EXPECT_EQ(one.receiver.pixels, two.receiver.pixels);
+    EXPECT_EQ(one.health.get("cells_updated"), two.health.get("cells_updated"));
+}

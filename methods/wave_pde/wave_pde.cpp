@@ -13,6 +13,7 @@
 // render(): trilinear lookups at the receiver points (harness/volume_texture_method, volume_grid).
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <string>
 
@@ -38,6 +39,8 @@ constexpr double kMaxCourant = 0.5773502691896258;  // 1 / sqrt(3): 3-D leapfrog
 // 3 + 0: 0.9 %; 1 + 0.6: 1.3 %; 1 + 1: 0.42 %; 0.5 + 1.5: 0.36 %. The excess is the edge's
 // diffraction, so it scales with the Fresnel width and the ratio holds at any grid.
 constexpr double kEdgeRampFresnel = 1.0, kEdgeGapFresnel = 1.25;
+// accuracy_claim: the regime's bounds and the factor on the flat baseline's error (README.md).
+constexpr double kClaimFocusFraction = 0.75, kClaimFresnelRatio = 0.5, kClaimFactor = 0.85;
 
 
 // cells: phi = 1 on cells the interface crosses (the paper): the interface's range over the cell's
@@ -125,6 +128,8 @@ public:
         wave::Settings settings = settings_;
         settings.accumulate = flux_output_ ? wave::Accumulate::Flux : wave::Accumulate::Sum;
         resolve_sides(hf, interior, tilt, frame.scene->path, settings);
+        sides_unbanded_under_tilt_ = (std::fabs(tilt.x) >= 1e-9 && settings.side_x() != wave::Sides::Zero) ||
+                                     (std::fabs(tilt.y) >= 1e-9 && settings.side_y() != wave::Sides::Zero);
         // The damping band pads the z faces always, an x or y face where it is not mirror or periodic;
         // under oblique light the face the light comes from also gets the light's lateral reach.
         const int pad_z = settings.sponge;
@@ -241,6 +246,78 @@ public:
         mark_built(frame);
     }
 
+    // The regime (see README.md): the phase-delayed launch with the flux output is the wave optics of
+    // the refracted light at the grid's wavelength, about 2 pi pulse cells. It approaches the
+    // geometric truth where (1) the receivers lie well before the first focus (near and past it, the
+    // caustic's peaks are narrower than the diffraction limit, and folds need the wave's interference
+    // structure resolved) and (2) the Fresnel ratio lambda L / l^2 is small: lambda over the light's
+    // path L to the deepest receiver, against the surface's feature scale l = 2 pi rms slope / rms
+    // curvature (the period of a sine). Limits and factor from the measurements in README.md.
+    AccuracyClaim accuracy_claim(const FrameGeometry& frame) const override {
+        if (!phase_delay_) return AccuracyClaim::outside("launch=paper: every interface cell emits at once (the limit of an infinite index; Sec. 4), the output ignores the index");
+        if (!flux_output_ || b_ != 1.0)
+            return AccuracyClaim::outside("the texture is not the irradiance: output=" + std::string(flux_output_ ? "flux" : "sum") +
+                                          " with b = " + fmt(b_) + " (the claim holds for output=flux, b = 1)");
+        if (sides_unbanded_under_tilt_)
+            return AccuracyClaim::outside("oblique light with mirror or periodic sides: the faces reflect the refracted wave (sides=auto bands them)");
+        const ObjectInstance* water = find_water_interface(frame);
+        if (!water || texture_.data.empty()) return AccuracyClaim::outside("no water interface or no texture");
+        const HeightField& hf = *water->heightfield;
+        const glm::dvec3 d = glm::normalize(frame.scene->lights.front().direction);
+        const glm::dvec3 t = mean_refracted_direction(*frame.scene, ior_);
+        const double h = texture_.shape.spacing;
+        const double depth = surface_z_ - (texture_.shape.origin.z + h);  // the deepest receiver
+        const SurfaceScales sc = surface_scales(hf);
+        if (std::fabs(ior_ - 1.0) < 1e-9) return AccuracyClaim::within(kClaimFactor);  // nothing bends: the plane wave is exact
+        // The tangential (nearer) focus of the sharpest crest, along the ray (refraction at a curved
+        // surface: n cos^2 t / f = (n cos t - cos i) kappa), and its depth.
+        const double cos_i = std::fabs(d.z), cos_t = std::fabs(t.z);
+        const double power = (ior_ * cos_t - cos_i) * sc.focusing_curvature;
+        const double focus = power > 0.0 ? ior_ * cos_t * cos_t / power * cos_t : std::numeric_limits<double>::infinity();
+        if (depth > kClaimFocusFraction * focus)
+            return AccuracyClaim::outside("the deepest receiver lies " + fmt(depth) + " m below the surface, past " + fmt(kClaimFocusFraction) +
+                                          " of the first focus at " + fmt(focus) + " m (curvature " + fmt(sc.focusing_curvature) + " /m)");
+        const double lambda = 2.0 * M_PI * pulse_ * h, path = depth / std::max(cos_t, 1e-6);
+        const double ratio = sc.feature > 0.0 ? lambda * path / (sc.feature * sc.feature) : 0.0;
+        if (ratio > kClaimFresnelRatio)
+            return AccuracyClaim::outside("the grid's wavelength " + fmt(lambda) + " m (2 pi pulse cells of " + fmt(h) + " m) over the path " +
+                                          fmt(path) + " m diffracts beyond the surface's feature scale " + fmt(sc.feature) +
+                                          " m: lambda L / l^2 = " + fmt(ratio) + " > " + fmt(kClaimFresnelRatio) + " (a finer grid lowers it)");
+        return AccuracyClaim::within(kClaimFactor);
+    }
+    struct SurfaceScales {
+        double feature = 0.0;             // 2 pi rms slope / rms curvature (0: flat)
+        double focusing_curvature = 0.0;  // the largest -(smallest Hessian eigenvalue): crests focus
+    };
+    static SurfaceScales surface_scales(const HeightField& hf) {
+        SurfaceScales out;
+        if (hf.nx < 3 || hf.ny < 2 || hf.gradient.size() != hf.height.size()) return out;
+        double slope2 = 0.0, curv2 = 0.0;
+        std::int64_t count = 0;
+        for (int j = 0; j < hf.ny; ++j)
+            for (int i = 0; i < hf.nx; ++i) {
+                const int i0 = std::max(i - 1, 0), i1 = std::min(i + 1, hf.nx - 1);
+                const int j0 = std::max(j - 1, 0), j1 = std::min(j + 1, hf.ny - 1);
+                const glm::dvec2 gx = (glm::dvec2(hf.grad(i1, j)) - glm::dvec2(hf.grad(i0, j))) / ((i1 - i0) * hf.spacing.x);
+                const glm::dvec2 gy = j1 > j0 ? (glm::dvec2(hf.grad(i, j1)) - glm::dvec2(hf.grad(i, j0))) / ((j1 - j0) * hf.spacing.y)
+                                              : glm::dvec2(0.0);
+                const double xx = gx.x, yy = gy.y, xy = 0.5 * (gx.y + gy.x);
+                const double mean = 0.5 * (xx + yy), rad = std::sqrt(0.25 * (xx - yy) * (xx - yy) + xy * xy);
+                out.focusing_curvature = std::max(out.focusing_curvature, -(mean - rad));
+                const glm::dvec2 g(hf.grad(i, j));
+                slope2 += glm::dot(g, g);
+                curv2 += xx * xx + yy * yy + 2.0 * xy * xy;
+                ++count;
+            }
+        if (curv2 > 0.0 && count > 0) out.feature = 2.0 * M_PI * std::sqrt(slope2 / curv2);
+        return out;
+    }
+    static std::string fmt(double v) {
+        char buf[32];
+        std::snprintf(buf, sizeof buf, "%.3g", v);
+        return buf;
+    }
+
     // The Fresnel width sqrt(lambda depth) of the pulse's wavelength (about 2 pi pulse cells) over the
     // texture's depth, in cells: how far the diffraction of an edge of the sheet reaches.
     double fresnel_width_cells(int depth_cells) const { return std::sqrt(2.0 * M_PI * pulse_ * depth_cells); }
@@ -319,6 +396,7 @@ private:
     double pulse_;
     wave::Settings settings_;
     int steps_taken_ = 0;
+    bool sides_unbanded_under_tilt_ = false;
 };
 
 MethodInfo wave_pde_info() {
