@@ -54,13 +54,17 @@ Launch phase_delay_launch(const HeightField& hf, const VolumeShape& s, const glm
     Launch out;
     const double h = s.spacing, inv_n = 1.0 / ior;
     const glm::dvec3 d = glm::normalize(light);
-    // The source plane: one cell below the lowest point of the surface over the grid.
-    double lowest = std::numeric_limits<double>::infinity();
+    // The source plane: one cell below the lowest point of the surface over the grid's columns on the
+    // water (its linear extension beyond the rectangle may run far down over a wide padding).
+    double lowest = std::numeric_limits<double>::infinity(), lowest_any = lowest;
     for (int j = 0; j < s.ny; ++j)
         for (int i = 0; i < s.nx; ++i) {
             const glm::dvec3 c = s.center(i, j, 0);
-            lowest = std::min(lowest, extended_height(hf, c.x, c.y));
+            const double eta = extended_height(hf, c.x, c.y);
+            lowest_any = std::min(lowest_any, eta);
+            if (hf.contains(c.x, c.y)) lowest = std::min(lowest, eta);
         }
+    if (!std::isfinite(lowest)) lowest = lowest_any;
     const double z0 = lowest - h;
     out.plane_z = z0;
     struct Column {
