@@ -677,6 +677,14 @@ TEST(WavePhaseDelay, AccuracyClaimStatesItsBounds) {
     const AccuracyClaim coarse = claim_for(make_sine_scene(test_support::sine_case(0.0, -0.4, 0.0, false)), {{"grid", "32"}});
     EXPECT_FALSE(coarse.inside);
     EXPECT_NE(coarse.reason.find("lambda L / l^2 = "), std::string::npos) << coarse.reason;
+    // sine.json at the default grid (128): inside (Fresnel ratio 0.47, floor at 0.63 of the focus); at
+    // grid 64 the ratio is 0.94: outside. sine_oblique.json: its floor is at 0.88 of the tilted focus.
+    const Scene sine = load_scene(std::string(CAUSTICS_SOURCE_DIR) + "/scenes/sine.json");
+    EXPECT_TRUE(claim_for(sine, {}).inside) << claim_for(sine, {}).reason;
+    EXPECT_FALSE(claim_for(sine, {{"grid", "64"}}).inside);
+    const AccuracyClaim oblique = claim_for(load_scene(std::string(CAUSTICS_SOURCE_DIR) + "/scenes/sine_oblique.json"), {{"grid", "32"}});
+    EXPECT_FALSE(oblique.inside);
+    EXPECT_NE(oblique.reason.find("first focus at 0.4"), std::string::npos) << oblique.reason;
     // The paper's launch claims nothing.
     const AccuracyClaim paper = claim_for(make_sine_scene(inside_case), {{"grid", "32"}, {"launch", "paper"}, {"output", "sum"}});
     EXPECT_FALSE(paper.inside);
