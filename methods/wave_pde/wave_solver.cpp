@@ -39,7 +39,7 @@ template <bool Clamp, int Acc>
 [[gnu::noinline]] std::uint32_t update_row(int n, Sides sides, const float* __restrict c, const float* __restrict ym, const float* __restrict yp,
                          const float* __restrict zm, const float* __restrict zp, float* __restrict p,
                          float* __restrict acc, const float* __restrict a, const float* __restrict b,
-                         const float* __restrict l, float open0, float open_dx, std::int64_t& clamped) {
+                         const float* __restrict l, int open_lo, int open_hi, std::int64_t& clamped) {
     std::uint32_t top = 0;
     std::int64_t negative = 0;
     // One cell, with its x neighbours `left` and `right` (at the x faces: zero, the cell itself for
@@ -52,9 +52,9 @@ template <bool Clamp, int Acc>
             negative += next < 0.0f;
             next = next < 0.0f ? 0.0f : next;
         }
-        if constexpr (Acc == 2) {  // only while open0 + open_dx i >= 0 (CellWindow), as a select
-            const float flux = (next - p[i]) * (zp[i] - zm[i]);
-            acc[i] += open0 + open_dx * static_cast<float>(i) >= 0.0f ? flux : 0.0f;
+        if constexpr (Acc == 2) {  // only cells open_lo <= i < open_hi (CellWindow): an integer mask
+            const float open = static_cast<float>(static_cast<int>(i >= open_lo) & static_cast<int>(i < open_hi));
+            acc[i] += open * ((next - p[i]) * (zp[i] - zm[i]));
         }
         p[i] = next;
         const std::uint32_t bits = abs_bits(next);
@@ -77,6 +77,7 @@ template <bool Clamp, int Acc>
 // Normal CDF.
 double gauss_cdf(double x) { return 0.5 * std::erfc(-x * 0.7071067811865476); }
 constexpr double kSourceWidths = 4.0;  // a cell's pulse starts and ends this many widths from its time
+constexpr double kSourceBucket = 1.0;  // time span of the injection's buckets
 
 }  // namespace
 
@@ -120,31 +121,38 @@ void Simulation::set_initial(const std::vector<float>& initial) {
 
 void Simulation::set_source(Source source) {
     source_ = std::move(source);
-    // Stable order by time, then cell: the injection order (and so the result) is fixed.
+    // Ordered by time bucket, then cell: the injection walks memory in order within a bucket (sorted by
+    // time alone, its writes scatter over the sheet and miss the cache), and the order (so the result)
+    // is fixed.
     std::sort(source_.cells.begin(), source_.cells.end(), [](const SourceCell& x, const SourceCell& y) {
-        return x.time != y.time ? x.time < y.time : x.cell < y.cell;
+        const double bx = std::floor(x.time / kSourceBucket), by = std::floor(y.time / kSourceBucket);
+        return bx != by ? bx < by : x.cell < y.cell;
     });
     source_done_ = 0;
 }
 
 double Simulation::source_end() const {
-    if (source_.cells.empty()) return -std::numeric_limits<double>::infinity();
-    return source_.cells.back().time + kSourceWidths * source_.width;
+    double last = -std::numeric_limits<double>::infinity();
+    for (const SourceCell& c : source_.cells) last = std::max(last, static_cast<double>(c.time));
+    return last + kSourceWidths * source_.width;
 }
 
 // Brings every source cell's displacement up to the time of level n (phi^n = cur_), raising phi^n and
-// phi^{n-1} alike (the velocity is unchanged). Cells whose pulse has not started are skipped (sorted by
-// time: the scan stops at the first), those whose pulse has ended leave the scan. Serial: the order of
+// phi^{n-1} alike (the velocity is unchanged). Buckets whose pulses have not started end the scan,
+// those whose pulses have ended leave it. Serial: the order of
 // the additions, and so the result, does not depend on the thread count.
 void Simulation::inject(int update_top) {
     if (source_.cells.empty()) return;
     const double t = steps_ * settings_.courant, t_prev = t - settings_.courant, w = source_.width;
     const std::size_t layer = static_cast<std::size_t>(shape_.nx) * shape_.ny;
     const std::size_t end_cell = static_cast<std::size_t>(update_top + 1) * layer;
-    while (source_done_ < source_.cells.size() && source_.cells[source_done_].time + kSourceWidths * w < t_prev) ++source_done_;
+    auto bucket_start = [](const SourceCell& c) { return std::floor(c.time / kSourceBucket) * kSourceBucket; };
+    while (source_done_ < source_.cells.size() && bucket_start(source_.cells[source_done_]) + kSourceBucket + kSourceWidths * w < t_prev)
+        ++source_done_;
     for (std::size_t q = source_done_; q < source_.cells.size(); ++q) {
         SourceCell& sc = source_.cells[q];
-        if (sc.time - kSourceWidths * w > t) break;
+        if (bucket_start(sc) - kSourceWidths * w > t) break;
+        if (sc.time - kSourceWidths * w > t || sc.time + kSourceWidths * w < t_prev) continue;
         if (sc.cell >= end_cell) continue;  // above the updated layers (the caller's window keeps them)
         // The displacement due by time t, less what is in: one CDF per cell and step.
         const double target = sc.weight * gauss_cdf((t - sc.time) / w);
@@ -229,18 +237,24 @@ double Simulation::step(std::vector<float>* accumulate, int accumulate_top) {
             const float* b = a + nx;
             const float* l = b + nx;
             const int mode = acc ? (flux ? 2 : 1) : 0;
+            // The row's cells still accumulating: s0 + sx i + sy j + sz k >= time.
+            int open_lo = 0, open_hi = nx;
             const CellWindow& win = settings_.window;
-            const float open_dx = static_cast<float>(win.sx);
-            const float open0 = std::isfinite(win.s0) ? static_cast<float>(win.s0 + win.sy * j + win.sz * k - time) : 1.0f;
+            if (std::isfinite(win.s0)) {
+                const double c0 = win.s0 + win.sy * j + win.sz * static_cast<double>(k) - time;
+                if (win.sx > 0.0) open_lo = static_cast<int>(std::clamp(std::ceil(-c0 / win.sx), 0.0, double(nx)));
+                else if (win.sx < 0.0) open_hi = static_cast<int>(std::clamp(std::floor(c0 / -win.sx) + 1.0, 0.0, double(nx)));
+                else if (c0 < 0.0) open_hi = 0;
+            }
             std::uint32_t row_top;
             if (clamp)
-                row_top = mode == 2   ? update_row<true, 2>(nx, sides, c, ym, yp, zm, zp, p, acc, a, b, l, open0, open_dx, clamped)
-                          : mode == 1 ? update_row<true, 1>(nx, sides, c, ym, yp, zm, zp, p, acc, a, b, l, open0, open_dx, clamped)
-                                      : update_row<true, 0>(nx, sides, c, ym, yp, zm, zp, p, acc, a, b, l, open0, open_dx, clamped);
+                row_top = mode == 2   ? update_row<true, 2>(nx, sides, c, ym, yp, zm, zp, p, acc, a, b, l, open_lo, open_hi, clamped)
+                          : mode == 1 ? update_row<true, 1>(nx, sides, c, ym, yp, zm, zp, p, acc, a, b, l, open_lo, open_hi, clamped)
+                                      : update_row<true, 0>(nx, sides, c, ym, yp, zm, zp, p, acc, a, b, l, open_lo, open_hi, clamped);
             else
-                row_top = mode == 2   ? update_row<false, 2>(nx, sides, c, ym, yp, zm, zp, p, acc, a, b, l, open0, open_dx, clamped)
-                          : mode == 1 ? update_row<false, 1>(nx, sides, c, ym, yp, zm, zp, p, acc, a, b, l, open0, open_dx, clamped)
-                                      : update_row<false, 0>(nx, sides, c, ym, yp, zm, zp, p, acc, a, b, l, open0, open_dx, clamped);
+                row_top = mode == 2   ? update_row<false, 2>(nx, sides, c, ym, yp, zm, zp, p, acc, a, b, l, open_lo, open_hi, clamped)
+                          : mode == 1 ? update_row<false, 1>(nx, sides, c, ym, yp, zm, zp, p, acc, a, b, l, open_lo, open_hi, clamped)
+                                      : update_row<false, 0>(nx, sides, c, ym, yp, zm, zp, p, acc, a, b, l, open_lo, open_hi, clamped);
             ++rows;
             top = std::max(top, row_top);
             const bool nonzero = !band || row_top > threshold_bits;
