@@ -448,7 +448,9 @@ MethodInfo wave_pde_info() {
          "the volume's x and y faces: sponge = the damping band (the paper; the texture darkens within "
          "about sqrt(6 depth h) of them, where the accumulated sheet is cut off), mirror = zero normal "
          "derivative (the sheet continues as its mirror image), periodic = the field wraps (only for a "
-         "tiling water surface whose period is the texture box), auto = periodic where it applies, else mirror"},
+         "tiling water surface whose period is the texture box), auto = periodic where it applies, else mirror; "
+         "under oblique light (launch=phase_delay) auto bands an axis the refracted light crosses sideways and pads "
+         "it with the light's reach and a soft-edged sheet (wave_launch.hpp)"},
         {"sponge", ParamType::Int, "12", 0, 256, {},
          "damping band width in cells on the volume's faces (top and bottom; also the sides with "
          "sides=sponge), a smooth quadratic ramp so the domain boundary does not reflect"},
