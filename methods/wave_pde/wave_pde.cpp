@@ -37,8 +37,9 @@ constexpr double kMaxCourant = 0.5773502691896258;  // 1 / sqrt(3): 3-D leapfrog
 // in Fresnel widths (wave_launch.hpp, upstream_padding). Measured at n = 1 under light 30 degrees from
 // vertical, grid 64 (std/mean over the floor of sine_ior1's geometry): edge and gap 1 + 0: 4 %;
 // 3 + 0: 0.9 %; 1 + 0.6: 1.3 %; 1 + 1: 0.42 %; 0.5 + 1.5: 0.36 %. The excess is the edge's
-// diffraction, so it scales with the Fresnel width and the ratio holds at any grid.
-constexpr double kEdgeRampFresnel = 1.0, kEdgeGapFresnel = 1.25;
+// diffraction, so it scales with the Fresnel width; its residue still grew with the grid at 1 + 1.25
+// (sine_ior1: 0.15 % at 128, 0.24 % at 256) and vanishes at 1 + 2 (0.007 %, 0.006 %).
+constexpr double kEdgeRampFresnel = 1.0, kEdgeGapFresnel = 2.0;
 // accuracy_claim: the regime's bounds and the factor on the flat baseline's error (README.md).
 constexpr double kClaimFocusFraction = 0.75, kClaimFresnelRatio = 0.5, kClaimFactor = 0.85;
 
@@ -190,7 +191,8 @@ public:
             // it; phase delay: the layer's stop time).
             if (window && phase_delay_) {
                 const double t = step * settings_.courant;
-                while (top >= 0 && launch.stop[static_cast<std::size_t>(top)] < t) --top;
+                // (the last half step takes part of a stop that falls within it: wave_solver.cpp)
+                while (top >= 0 && launch.stop[static_cast<std::size_t>(top)] + 0.5 * settings_.courant < t) --top;
             } else if (window) {
                 top = static_cast<int>(std::floor(front0 - settings_.courant * step + margin_));
             } else {
@@ -442,7 +444,8 @@ MethodInfo wave_pde_info() {
          "stop=arrival: a cell stops accumulating when the downward front's centre is this many cells "
          "past it (paper launch; 3: the initial sheet's half-width; 6 also takes the scheme's dispersive "
          "tail behind the pulse; much more adds the wakes that cancel the caustic), or (phase_delay) "
-         "this many cells after the latest first arrival plus 4 pulse widths"},
+         "this many cells after the latest first arrival plus 4 pulse widths and 7 cells of the scheme's "
+         "dispersive tail"},
         {"epsilon", ParamType::Float, "0.001", 1e-9, 1.0, {}, "iterations=0, stop=epsilon: stop when every |phi| is below this"},
         {"sides", ParamType::Enum, "auto", 0, 0, {"auto", "sponge", "mirror", "periodic"},
          "the volume's x and y faces: sponge = the damping band (the paper; the texture darkens within "

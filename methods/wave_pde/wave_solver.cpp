@@ -5,6 +5,8 @@
 #include <bit>
 #include <cmath>
 #include <limits>
+#include <tuple>
+#include <utility>
 
 #include <tbb/parallel_for.h>
 
@@ -209,6 +211,7 @@ double Simulation::step(std::vector<float>* accumulate, int accumulate_top) {
     tbb::parallel_for(0, tiles, [&](int t) {
         std::uint32_t top = 0;
         std::int64_t clamped = 0, rows = 0;
+        std::vector<float> saved;
         const int j0 = t * kTileRows, j1 = std::min(ny, j0 + kTileRows);
         for (int k = 0; k <= update_top; ++k)
         for (int j = j0; j < j1; ++j) {
@@ -237,15 +240,32 @@ double Simulation::step(std::vector<float>* accumulate, int accumulate_top) {
             const float* b = a + nx;
             const float* l = b + nx;
             const int mode = acc ? (flux ? 2 : 1) : 0;
-            // The row's cells still accumulating: s0 + sx i + sy j + sz k >= time.
-            int open_lo = 0, open_hi = nx;
+            // The row's cells still accumulating (CellWindow): level n stands for the times within half
+            // a step of its own, so a cell whose stop S falls inside that interval takes the fraction
+            // (S - time + dt/2) / dt of its flux (the sub-step interpolation of the stop: a stop
+            // rounded to whole steps would modulate the captured tail with the stop's phase, a ripple
+            // of a few tenths of a percent along a tilted front). [open_lo, open_hi): S > time - dt/2;
+            // among them [part_lo, part_hi): S < time + dt/2.
+            int open_lo = 0, open_hi = nx, part_lo = 0, part_hi = 0;
             const CellWindow& win = settings_.window;
-            if (std::isfinite(win.s0)) {
-                const double c0 = win.s0 + win.sy * j + win.sz * static_cast<double>(k) - time;
-                if (win.sx > 0.0) open_lo = static_cast<int>(std::clamp(std::ceil(-c0 / win.sx), 0.0, double(nx)));
-                else if (win.sx < 0.0) open_hi = static_cast<int>(std::clamp(std::floor(c0 / -win.sx) + 1.0, 0.0, double(nx)));
-                else if (c0 < 0.0) open_hi = 0;
+            const double half = 0.5 * settings_.courant;
+            const double c0 = std::isfinite(win.s0) ? win.s0 + win.sy * j + win.sz * static_cast<double>(k) - time : 0.0;
+            if (flux && std::isfinite(win.s0)) {
+                auto first_above = [&](double level) {  // the range of i with c0 + sx i > level
+                    if (win.sx > 0.0) return std::pair<int, int>(static_cast<int>(std::clamp(std::floor((level - c0) / win.sx) + 1.0, 0.0, double(nx))), nx);
+                    if (win.sx < 0.0) return std::pair<int, int>(0, static_cast<int>(std::clamp(std::ceil((c0 - level) / -win.sx), 0.0, double(nx))));
+                    return c0 > level ? std::pair<int, int>(0, nx) : std::pair<int, int>(0, 0);
+                };
+                std::tie(open_lo, open_hi) = first_above(-half);
+                const auto [full_lo, full_hi] = first_above(half);
+                // Partial: open but not full (one end of the open range; the whole of it when sx = 0).
+                if (full_lo >= full_hi) part_lo = open_lo, part_hi = open_hi;
+                else if (win.sx > 0.0) part_lo = open_lo, part_hi = std::max(open_lo, full_lo);
+                else part_lo = std::min(open_hi, full_hi), part_hi = open_hi;
             }
+            saved.clear();
+            if (acc && flux)
+                for (int i = part_lo; i < part_hi; ++i) saved.push_back(p[i]);
             std::uint32_t row_top;
             if (clamp)
                 row_top = mode == 2   ? update_row<true, 2>(nx, sides, c, ym, yp, zm, zp, p, acc, a, b, l, open_lo, open_hi, clamped)
@@ -255,6 +275,12 @@ double Simulation::step(std::vector<float>* accumulate, int accumulate_top) {
                 row_top = mode == 2   ? update_row<false, 2>(nx, sides, c, ym, yp, zm, zp, p, acc, a, b, l, open_lo, open_hi, clamped)
                           : mode == 1 ? update_row<false, 1>(nx, sides, c, ym, yp, zm, zp, p, acc, a, b, l, open_lo, open_hi, clamped)
                                       : update_row<false, 0>(nx, sides, c, ym, yp, zm, zp, p, acc, a, b, l, open_lo, open_hi, clamped);
+            if (acc && flux)
+                for (int i = part_lo; i < part_hi; ++i) {
+                    const float part_flux = (p[i] - saved[static_cast<std::size_t>(i - part_lo)]) * (zp[i] - zm[i]);
+                    const double w = std::clamp((c0 + win.sx * i + half) / settings_.courant, 0.0, 1.0);
+                    acc[i] -= static_cast<float>(1.0 - w) * part_flux;
+                }
             ++rows;
             top = std::max(top, row_top);
             const bool nonzero = !band || row_top > threshold_bits;
