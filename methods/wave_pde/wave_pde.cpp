@@ -1,14 +1,19 @@
 // wave_pde: Mercier 2013, Sec. 4 ("Wave Interpretation"), Algorithm 3.
 //
-// update(frame): phi = 1 on the cells the water-air interface crosses, 0 elsewhere, zero initial
-// velocity; leapfrog steps of the wave equation over the water volume padded by a damping band;
-// the caustic texture is the sum of phi over the steps, mapped by a * max(0, C)^b (Sec. 4.1).
-// By default (stop=arrival) each cell sums phi until the downward front has passed it by `margin`
-// cells, and only a window of layers around the front is updated (see arrival_steps for why the sum
-// to convergence, Algorithm 3's stop, carries no caustic).
+// update(frame): leapfrog steps of the wave equation (Eq. 5) over the water volume padded by a damping
+// band, accumulating a caustic texture, mapped by a * max(0, C)^b (Sec. 4.1).
+// launch=phase_delay (default, wave_launch.hpp): a smooth sheet at the exact interface height emits,
+// cell by cell, at the time the incident plane wave reaches it, (d . p) / n: the refracted front.
+// launch=paper: phi = 1 on the cells the interface crosses at t = 0, zero initial velocity.
+// output=flux (default): C = the time-integrated downward energy flux (wave_solver.hpp), proportional
+// to the irradiance on a horizontal receiver; output=sum: Algorithm 3's sum of phi (the amplitude).
+// By default (stop=arrival) each layer accumulates until the front has passed it, and only a window of
+// layers around the front is updated (see arrival_steps for why the sum to convergence, Algorithm 3's
+// stop, carries no caustic).
 // render(): trilinear lookups at the receiver points (harness/volume_texture_method, volume_grid).
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <string>
 
@@ -19,13 +24,25 @@
 #include "registry.hpp"
 #include "timing.hpp"
 #include "volume_grid.hpp"
+#include "volume_lookup.hpp"
 #include "volume_texture_method.hpp"
+#include "wave_launch.hpp"
 #include "wave_solver.hpp"
 
 namespace caustics {
 namespace {
 
 constexpr double kMaxCourant = 0.5773502691896258;  // 1 / sqrt(3): 3-D leapfrog stability bound
+// The sheet's soft edge and the full-weight gap between it and the first ray that reaches the texture,
+// in Fresnel widths (wave_launch.hpp, upstream_padding). Measured at n = 1 under light 30 degrees from
+// vertical, grid 64 (std/mean over the floor of sine_ior1's geometry): edge and gap 1 + 0: 4 %;
+// 3 + 0: 0.9 %; 1 + 0.6: 1.3 %; 1 + 1: 0.42 %; 0.5 + 1.5: 0.36 %. The excess is the edge's
+// diffraction, so it scales with the Fresnel width; its residue still grew with the grid at 1 + 1.25
+// (sine_ior1: 0.15 % at 128, 0.24 % at 256) and vanishes at 1 + 2 (0.007 %, 0.006 %).
+constexpr double kEdgeRampFresnel = 1.0, kEdgeGapFresnel = 2.0;
+// accuracy_claim: the regime's bounds and the factor on the flat baseline's error (README.md).
+constexpr double kClaimFocusFraction = 0.75, kClaimFresnelRatio = 0.5, kClaimFactor = 0.85;
+
 
 // cells: phi = 1 on cells the interface crosses (the paper): the interface's range over the cell's
 // footprint (corners and centre) overlaps the cell's z-range. smooth: phi = exp(-d^2 / 2h^2) of the
@@ -75,7 +92,10 @@ public:
           smooth_init_(p.get_enum("init") == "smooth"),
           stop_epsilon_(p.get_enum("stop") == "epsilon"),
           margin_(p.get_float("margin")),
-          sides_(p.get_enum("sides")) {
+          sides_(p.get_enum("sides")),
+          phase_delay_(p.get_enum("launch") == "phase_delay"),
+          flux_output_(p.get_enum("output") == "flux"),
+          pulse_(p.get_float("pulse")) {
         settings_.courant = p.get_float("courant");
         settings_.sponge = static_cast<int>(p.get_int("sponge"));
         settings_.sponge_strength = p.get_float("sponge_strength");
@@ -101,38 +121,90 @@ public:
         if (!water) throw InputError(frame.scene->path, "objects", "wave_pde needs a height-field dielectric interface");
         ior_ = water->object->material.ior;
         const HeightField& hf = *water->heightfield;
-        const VolumeShape interior = caustic_volume(frame, *water, grid_, 0.0);
+        const glm::dvec3 refracted = mean_refracted_direction(*frame.scene, ior_);
+        VolumeShape interior = caustic_volume(frame, *water, grid_, 0.0);
+        if (phase_delay_) interior = extend_downstream(interior, refracted);
+        // The paper's launch has no direction: its fronts leave along the interface normals.
+        const glm::dvec3 tilt = phase_delay_ ? refracted : glm::dvec3(0.0, 0.0, -1.0);
         wave::Settings settings = settings_;
-        settings.sides = resolve_sides(hf, interior, frame.scene->path);
-        // The damping band pads the z faces always, the x and y faces only where they are not mirror
-        // or periodic.
-        const int pad_xy = settings.sides == wave::Sides::Zero ? settings.sponge : 0, pad_z = settings.sponge;
-        const VolumeShape full = interior.padded(pad_xy, pad_z);
+        settings.accumulate = flux_output_ ? wave::Accumulate::Flux : wave::Accumulate::Sum;
+        resolve_sides(hf, interior, tilt, frame.scene->path, settings);
+        sides_unbanded_under_tilt_ = (std::fabs(tilt.x) >= 1e-9 && settings.side_x() != wave::Sides::Zero) ||
+                                     (std::fabs(tilt.y) >= 1e-9 && settings.side_y() != wave::Sides::Zero);
+        // The damping band pads the z faces always, an x or y face where it is not mirror or periodic;
+        // under oblique light the face the light comes from also gets the light's lateral reach.
+        const int pad_z = settings.sponge;
+        const wave::AxisPadding none{0, 0, 0, 0};
+        const double fresnel = fresnel_width_cells(interior.nz);
+        const int ramp = static_cast<int>(std::ceil(kEdgeRampFresnel * fresnel)), gap = static_cast<int>(std::ceil(kEdgeGapFresnel * fresnel));
+        const wave::AxisPadding px = settings.side_x() == wave::Sides::Zero
+                                         ? wave::upstream_padding(tilt.x, tilt.z, interior.nz, settings.sponge, ramp, gap) : none;
+        const wave::AxisPadding py = settings.side_y() == wave::Sides::Zero
+                                         ? wave::upstream_padding(tilt.y, tilt.z, interior.nz, settings.sponge, ramp, gap) : none;
+        VolumeShape full = interior;
+        full.origin -= full.spacing * glm::dvec3(px.low, py.low, pad_z);
+        full.nx += px.low + px.high;
+        full.ny += py.low + py.high;
+        full.nz += 2 * pad_z;
 
         Stopwatch watch;
         wave::Simulation sim(full, settings);
-        sim.set_initial(interface_cells(hf, full, smooth_init_));
+        wave::Launch launch;
+        if (phase_delay_) {
+            // The sheet stops at the inner edge of each damping band, softly where light enters.
+            wave::Aperture aperture;
+            const wave::AxisPadding pads[2] = {px, py};
+            const int counts[2] = {full.nx, full.ny};
+            const bool banded[2] = {settings.side_x() == wave::Sides::Zero, settings.side_y() == wave::Sides::Zero};
+            for (int a = 0; a < 2; ++a) {
+                if (!banded[a]) continue;
+                aperture.begin[a] = settings.sponge;
+                aperture.end[a] = counts[a] - settings.sponge;
+                aperture.ramp_begin[a] = pads[a].ramp_low;
+                aperture.ramp_end[a] = pads[a].ramp_high;
+            }
+            launch = wave::phase_delay_launch(hf, full, frame.scene->lights.front().direction, ior_, frame.scene->fresnel,
+                                              refracted, pulse_, margin_, aperture);
+            health_.add("shadowed_columns", launch.shadowed_columns);
+            health_.add("folded_columns", launch.folded_columns);
+            sim.set_source(std::move(launch.source));
+            if (steps_ == 0 && !stop_epsilon_) sim.set_window(launch.window);
+        } else {
+            sim.set_initial(interface_cells(hf, full, smooth_init_));
+        }
         std::vector<float> accumulated(full.size(), 0.0f);
         update_stages_.emplace_back("init", watch.ms());
 
         watch.reset();
         const bool window = steps_ == 0 && !stop_epsilon_;
-        const int cap = steps_ > 0 ? steps_ : stop_epsilon_ ? epsilon_step_cap(full) : arrival_steps(hf, interior);
-        // stop=arrival: the layer of the downward front's centre at step 0 (cell centres at k + 1/2).
+        const int cap = steps_ > 0 ? steps_
+                        : stop_epsilon_ ? epsilon_step_cap(full) + static_cast<int>(std::ceil(std::max(0.0, sim.source_end()) / settings_.courant))
+                        : phase_delay_ ? static_cast<int>(std::ceil(launch.stop.front() / settings_.courant)) + 2
+                                       : arrival_steps(hf, interior);
+        // stop=arrival, paper launch: the layer of the downward front's centre at step 0 (cell centres
+        // at k + 1/2).
         const double front0 = (interface_top(hf) - full.origin.z) / full.spacing - 0.5;
-        int step = 0;
+        int step = 0, top = full.nz - 1;
         bool finite = true, settled = false;
         for (; step < cap; ++step) {
-            // A layer accumulates until the front's centre is margin_ below it.
-            const int top = window ? static_cast<int>(std::floor(front0 - settings_.courant * step + margin_))
-                                   : std::numeric_limits<int>::max();
-            if (window && top < settings_.sponge) break;  // every layer of the texture is done
+            // A layer accumulates until the front has passed it (paper launch: its centre margin_ below
+            // it; phase delay: the layer's stop time).
+            if (window && phase_delay_) {
+                const double t = step * settings_.courant;
+                // (the last half step takes part of a stop that falls within it: wave_solver.cpp)
+                while (top >= 0 && launch.stop[static_cast<std::size_t>(top)] + 0.5 * settings_.courant < t) --top;
+            } else if (window) {
+                top = static_cast<int>(std::floor(front0 - settings_.courant * step + margin_));
+            } else {
+                top = std::numeric_limits<int>::max();
+            }
+            if (window && top < pad_z) break;  // every layer of the texture is done
             const double max_abs = sim.step(&accumulated, top);
             if (!std::isfinite(max_abs)) {
                 finite = false;
                 break;
             }
-            if (steps_ == 0 && stop_epsilon_ && max_abs < epsilon_) {
+            if (steps_ == 0 && stop_epsilon_ && max_abs < epsilon_ && step * settings_.courant > sim.source_end()) {
                 settled = true;
                 ++step;
                 break;
@@ -143,14 +215,17 @@ public:
         update_stages_.emplace_back("solve", watch.ms());
         if (steps_ == 0 && stop_epsilon_ && !settled && finite) health_.add("not_converged");
 
-        // The texture over the interior box; a * max(0, C)^b.
+        // The texture over the interior box; a * max(0, C)^b. Flux: the centred differences' factor
+        // 1/4 (wave_solver.hpp); a negative value is a net upward flux (above the sheet, where the
+        // upward half of the launch leaves).
         watch.reset();
         texture_ = VolumeF(interior);
+        const double scale = flux_output_ ? 0.25 : 1.0;
         std::int64_t negative = 0, nonfinite = 0;
         for (int k = 0; k < interior.nz; ++k)
             for (int j = 0; j < interior.ny; ++j)
                 for (int i = 0; i < interior.nx; ++i) {
-                    double c = accumulated[full.index(i + pad_xy, j + pad_xy, k + pad_z)];
+                    double c = scale * accumulated[full.index(i + px.low, j + py.low, k + pad_z)];
                     if (!std::isfinite(c) || !finite) {
                         ++nonfinite;
                         c = 0.0;
@@ -163,13 +238,105 @@ public:
                 }
         update_stages_.emplace_back("post_process", watch.ms());
 
-        health_.add("clamped", sim.clamped() + negative);
+        health_.add("clamped", sim.clamped() + (flux_output_ ? 0 : negative));
+        if (flux_output_) health_.add("upward_flux", negative);
         health_.add("nonfinite", nonfinite);
         health_.add("cfl_violations", settings_.courant > kMaxCourant ? 1 : 0);  // refused by the parameter range
         health_.add("steps", steps_taken_);
         health_.add("cells_updated", sim.cells_updated());
         set_interface(hf);
         mark_built(frame);
+    }
+
+    // The regime (see README.md): the phase-delayed launch with the flux output is the wave optics of
+    // the refracted light at the grid's wavelength, about 2 pi pulse cells. It approaches the
+    // geometric truth where (1) the receivers lie well before the first focus (near and past it, the
+    // caustic's peaks are narrower than the diffraction limit, and folds need the wave's interference
+    // structure resolved) and (2) the Fresnel ratio lambda L / l^2 is small: lambda over the light's
+    // path L to the deepest receiver, against the surface's feature scale l = 2 pi rms slope / rms
+    // curvature (the period of a sine). Limits and factor from the measurements in README.md.
+    AccuracyClaim accuracy_claim(const FrameGeometry& frame) const override {
+        if (!phase_delay_) return AccuracyClaim::outside("launch=paper: every interface cell emits at once (the limit of an infinite index; Sec. 4), the output ignores the index");
+        if (!flux_output_ || b_ != 1.0)
+            return AccuracyClaim::outside("the texture is not the irradiance: output=" + std::string(flux_output_ ? "flux" : "sum") +
+                                          " with b = " + fmt(b_) + " (the claim holds for output=flux, b = 1)");
+        if (sides_unbanded_under_tilt_)
+            return AccuracyClaim::outside("oblique light with mirror or periodic sides: the faces reflect the refracted wave (sides=auto bands them)");
+        const ObjectInstance* water = find_water_interface(frame);
+        if (!water || texture_.data.empty()) return AccuracyClaim::outside("no water interface or no texture");
+        const HeightField& hf = *water->heightfield;
+        const glm::dvec3 d = glm::normalize(frame.scene->lights.front().direction);
+        const glm::dvec3 t = mean_refracted_direction(*frame.scene, ior_);
+        const double h = texture_.shape.spacing;
+        const double depth = surface_z_ - (texture_.shape.origin.z + h);  // the deepest receiver
+        const SurfaceScales sc = surface_scales(hf);
+        if (std::fabs(ior_ - 1.0) < 1e-9) return AccuracyClaim::within(kClaimFactor);  // nothing bends: the plane wave is exact
+        // The tangential (nearer) focus of the sharpest crest, along the ray (refraction at a curved
+        // surface: n cos^2 t / f = (n cos t - cos i) kappa), and its depth.
+        const double cos_i = std::fabs(d.z), cos_t = std::fabs(t.z);
+        const double power = (ior_ * cos_t - cos_i) * sc.focusing_curvature;
+        const double focus = power > 0.0 ? ior_ * cos_t * cos_t / power * cos_t : std::numeric_limits<double>::infinity();
+        if (depth > kClaimFocusFraction * focus)
+            return AccuracyClaim::outside("the deepest receiver lies " + fmt(depth) + " m below the surface, past " + fmt(kClaimFocusFraction) +
+                                          " of the first focus at " + fmt(focus) + " m (curvature " + fmt(sc.focusing_curvature) + " /m)");
+        const double lambda = 2.0 * M_PI * pulse_ * h, path = depth / std::max(cos_t, 1e-6);
+        const double ratio = sc.feature > 0.0 ? lambda * path / (sc.feature * sc.feature) : 0.0;
+        if (ratio > kClaimFresnelRatio)
+            return AccuracyClaim::outside("the grid's wavelength " + fmt(lambda) + " m (2 pi pulse cells of " + fmt(h) + " m) over the path " +
+                                          fmt(path) + " m diffracts beyond the surface's feature scale " + fmt(sc.feature) +
+                                          " m: lambda L / l^2 = " + fmt(ratio) + " > " + fmt(kClaimFresnelRatio) + " (a finer grid lowers it)");
+        return AccuracyClaim::within(kClaimFactor);
+    }
+    struct SurfaceScales {
+        double feature = 0.0;             // 2 pi rms slope / rms curvature (0: flat)
+        double focusing_curvature = 0.0;  // the largest -(smallest Hessian eigenvalue): crests focus
+    };
+    static SurfaceScales surface_scales(const HeightField& hf) {
+        SurfaceScales out;
+        if (hf.nx < 3 || hf.ny < 2 || hf.gradient.size() != hf.height.size()) return out;
+        double slope2 = 0.0, curv2 = 0.0;
+        std::int64_t count = 0;
+        for (int j = 0; j < hf.ny; ++j)
+            for (int i = 0; i < hf.nx; ++i) {
+                const int i0 = std::max(i - 1, 0), i1 = std::min(i + 1, hf.nx - 1);
+                const int j0 = std::max(j - 1, 0), j1 = std::min(j + 1, hf.ny - 1);
+                const glm::dvec2 gx = (glm::dvec2(hf.grad(i1, j)) - glm::dvec2(hf.grad(i0, j))) / ((i1 - i0) * hf.spacing.x);
+                const glm::dvec2 gy = j1 > j0 ? (glm::dvec2(hf.grad(i, j1)) - glm::dvec2(hf.grad(i, j0))) / ((j1 - j0) * hf.spacing.y)
+                                              : glm::dvec2(0.0);
+                const double xx = gx.x, yy = gy.y, xy = 0.5 * (gx.y + gy.x);
+                const double mean = 0.5 * (xx + yy), rad = std::sqrt(0.25 * (xx - yy) * (xx - yy) + xy * xy);
+                out.focusing_curvature = std::max(out.focusing_curvature, -(mean - rad));
+                const glm::dvec2 g(hf.grad(i, j));
+                slope2 += glm::dot(g, g);
+                curv2 += xx * xx + yy * yy + 2.0 * xy * xy;
+                ++count;
+            }
+        if (curv2 > 0.0 && count > 0) out.feature = 2.0 * M_PI * std::sqrt(slope2 / curv2);
+        return out;
+    }
+    static std::string fmt(double v) {
+        char buf[32];
+        std::snprintf(buf, sizeof buf, "%.3g", v);
+        return buf;
+    }
+
+    // The Fresnel width sqrt(lambda depth) of the pulse's wavelength (about 2 pi pulse cells) over the
+    // texture's depth, in cells: how far the diffraction of an edge of the sheet reaches.
+    double fresnel_width_cells(int depth_cells) const { return std::sqrt(2.0 * M_PI * pulse_ * depth_cells); }
+
+    // caustic_volume clips the receivers' footprint to the water's rectangle, but under oblique light the
+    // refracted light reaches receivers beyond its downstream edge (the light's lateral reach over the
+    // box's depth): the texture grows by that reach on the downstream faces.
+    static VolumeShape extend_downstream(VolumeShape box, const glm::dvec3& refracted) {
+        const double tz = std::max(std::fabs(refracted.z), 1e-6);
+        for (int axis = 0; axis < 2; ++axis) {
+            const double t = refracted[axis];
+            if (std::fabs(t) < 1e-9) continue;
+            const int reach = static_cast<int>(std::ceil(box.nz * std::fabs(t) / tz));
+            (axis == 0 ? box.nx : box.ny) += reach;
+            if (t < 0.0) box.origin[axis] -= reach * box.spacing;
+        }
+        return box;
     }
 
     // The surface repeats with the box's period along x and y: a periodic field whose rectangle is
@@ -181,12 +348,24 @@ public:
         return std::fabs(box.origin.x - hf.origin.x) < tol && std::fabs(box.origin.y - hf.origin.y) < tol &&
                std::fabs(box_ext.x - ext.x) < tol && std::fabs(box_ext.y - ext.y) < tol;
     }
-    wave::Sides resolve_sides(const HeightField& hf, const VolumeShape& box, const std::string& scene_path) const {
-        if (sides_ == "sponge") return wave::Sides::Zero;
-        if (sides_ == "mirror") return wave::Sides::Mirror;
-        if (tiles_box(hf, box)) return wave::Sides::Periodic;
-        if (sides_ == "periodic") throw InputError(scene_path, "sides", "periodic needs a water surface that tiles the texture box (auto, mirror or sponge otherwise)");
-        return wave::Sides::Mirror;
+    // The x and y faces. An axis along which the (launch's) refracted light travels sideways gets the
+    // damping band under `auto`: the field there is no mirror image or period of itself (the wave
+    // enters through one face and leaves through the other), so the band absorbs what leaves and
+    // the upstream padding (upstream_padding) supplies what enters.
+    void resolve_sides(const HeightField& hf, const VolumeShape& box, const glm::dvec3& tilt, const std::string& scene_path,
+                       wave::Settings& settings) const {
+        const bool tilted_x = std::fabs(tilt.x) >= 1e-9, tilted_y = std::fabs(tilt.y) >= 1e-9;
+        settings.sides_y.reset();
+        if (sides_ == "sponge") settings.sides = wave::Sides::Zero;
+        else if (sides_ == "mirror") settings.sides = wave::Sides::Mirror;
+        else if (sides_ == "periodic" && !tiles_box(hf, box))
+            throw InputError(scene_path, "sides", "periodic needs a water surface that tiles the texture box (auto, mirror or sponge otherwise)");
+        else if (sides_ == "periodic") settings.sides = wave::Sides::Periodic;
+        else {
+            const wave::Sides level = tiles_box(hf, box) && !tilted_x && !tilted_y ? wave::Sides::Periodic : wave::Sides::Mirror;
+            settings.sides = tilted_x ? wave::Sides::Zero : level;
+            settings.sides_y = tilted_y ? wave::Sides::Zero : level;
+        }
     }
 
     // stop=arrival: an upper bound of the steps (the front's centre margin_ past the bottom of the
@@ -215,8 +394,11 @@ private:
     bool smooth_init_, stop_epsilon_;
     double margin_;
     std::string sides_;
+    bool phase_delay_, flux_output_;
+    double pulse_;
     wave::Settings settings_;
     int steps_taken_ = 0;
+    bool sides_unbanded_under_tilt_ = false;
 };
 
 MethodInfo wave_pde_info() {
@@ -241,20 +423,37 @@ MethodInfo wave_pde_info() {
          "the volume, i.e. without caustics)"},
         {"courant", ParamType::Float, "0.5", 0.01, kMaxCourant, {},
          "Courant number c dt / h of the leapfrog scheme; stable only up to 1/sqrt(3) = 0.5773502691896258"},
+        {"launch", ParamType::Enum, "phase_delay", 0, 0, {"phase_delay", "paper"},
+         "phase_delay: each interface point emits when the incident plane wave reaches it, (d . p) / n in "
+         "water path length, from a smooth sheet at the exact (sub-cell) height (wave_launch.hpp): the "
+         "emitted front is the refracted one and depends on the index; paper: phi = 1 on every interface "
+         "cell at t = 0 (Sec. 4, Algorithm 3; the limit of an infinite index, see `init`)"},
+        {"output", ParamType::Enum, "flux", 0, 0, {"flux", "sum"},
+         "flux: the time-integrated downward energy flux phi_t dphi/dz through each cell (the wave's "
+         "irradiance on a horizontal receiver, up to one scale); sum: Algorithm 3's sum of phi (the "
+         "pulse's amplitude, i.e. the square root of the irradiance: b = 2 maps it to irradiance)"},
+        {"pulse", ParamType::Float, "1.5", 0.5, 16.0, {},
+         "launch=phase_delay: Gaussian time width of each interface cell's pulse, in cells (the scheme "
+         "disperses shorter pulses; longer ones diffract more: the effective wavelength is about "
+         "2 pi pulse cells)"},
         {"init", ParamType::Enum, "cells", 0, 0, {"cells", "smooth"},
          "initial phi: cells (1 on cells the interface crosses, the paper) or smooth (exp(-d^2/2h^2) of "
          "the distance d to the interface: no grid-scale ringing, so stop=epsilon settles far sooner; "
          "with stop=arrival both give the same error within 1 %)"},
         {"margin", ParamType::Float, "3", 0.0, 64.0, {},
          "stop=arrival: a cell stops accumulating when the downward front's centre is this many cells "
-         "past it (3: the initial sheet's half-width; 6 also takes the scheme's dispersive tail behind "
-         "the pulse; much more adds the wakes that cancel the caustic)"},
+         "past it (paper launch; 3: the initial sheet's half-width; 6 also takes the scheme's dispersive "
+         "tail behind the pulse; much more adds the wakes that cancel the caustic), or (phase_delay) "
+         "this many cells after the latest first arrival plus 4 pulse widths and 7 cells of the scheme's "
+         "dispersive tail"},
         {"epsilon", ParamType::Float, "0.001", 1e-9, 1.0, {}, "iterations=0, stop=epsilon: stop when every |phi| is below this"},
         {"sides", ParamType::Enum, "auto", 0, 0, {"auto", "sponge", "mirror", "periodic"},
          "the volume's x and y faces: sponge = the damping band (the paper; the texture darkens within "
          "about sqrt(6 depth h) of them, where the accumulated sheet is cut off), mirror = zero normal "
          "derivative (the sheet continues as its mirror image), periodic = the field wraps (only for a "
-         "tiling water surface whose period is the texture box), auto = periodic where it applies, else mirror"},
+         "tiling water surface whose period is the texture box), auto = periodic where it applies, else mirror; "
+         "under oblique light (launch=phase_delay) auto bands an axis the refracted light crosses sideways and pads "
+         "it with the light's reach and a soft-edged sheet (wave_launch.hpp)"},
         {"sponge", ParamType::Int, "12", 0, 256, {},
          "damping band width in cells on the volume's faces (top and bottom; also the sides with "
          "sides=sponge), a smooth quadratic ramp so the domain boundary does not reflect"},

@@ -5,6 +5,8 @@
 #include <bit>
 #include <cmath>
 #include <limits>
+#include <tuple>
+#include <utility>
 
 #include <tbb/parallel_for.h>
 
@@ -29,15 +31,17 @@ std::vector<int> band_depth(int n, int sponge) {
 }
 
 // One x row of the leapfrog update: p (phi^{n-1} in, phi^{n+1} out) from c (phi^n) and its four y/z
-// neighbour rows; a, b, l: the factors of phi^n, phi^{n-1} and the Laplacian. Adds phi^n + phi^{n-1}
-// to acc when Accumulate (every other step: half the accumulator traffic). Returns the largest |phi^{n+1}| as its IEEE bits without the sign (a NaN compares above
-// inf): an integer maximum, which vectorises where a float one would not (NaN ordering).
+// neighbour rows; a, b, l: the factors of phi^n, phi^{n-1} and the Laplacian. Acc: what is added to
+// acc (Accumulate in the header): 0 nothing, 1 phi^n + phi^{n-1} (every other step: half the
+// accumulator traffic), 2 the flux term (phi^{n+1} - phi^{n-1}) (phi^n_{k+1} - phi^n_{k-1}). Returns
+// the largest |phi^{n+1}| as its IEEE bits without the sign (a NaN compares above inf): an integer
+// maximum, which vectorises where a float one would not (NaN ordering).
 // Kept out of line: inlined into the tile loop, GCC no longer vectorises it.
-template <bool Clamp, bool Accumulate>
+template <bool Clamp, int Acc>
 [[gnu::noinline]] std::uint32_t update_row(int n, Sides sides, const float* __restrict c, const float* __restrict ym, const float* __restrict yp,
                          const float* __restrict zm, const float* __restrict zp, float* __restrict p,
                          float* __restrict acc, const float* __restrict a, const float* __restrict b,
-                         const float* __restrict l, std::int64_t& clamped) {
+                         const float* __restrict l, int open_lo, int open_hi, std::int64_t& clamped) {
     std::uint32_t top = 0;
     std::int64_t negative = 0;
     // One cell, with its x neighbours `left` and `right` (at the x faces: zero, the cell itself for
@@ -45,10 +49,14 @@ template <bool Clamp, bool Accumulate>
     auto cell = [&](int i, float left, float right) {
         const float lap = left + right + ym[i] + yp[i] + zm[i] + zp[i] - 6.0f * c[i];
         float next = a[i] * c[i] - b[i] * p[i] + l[i] * lap;
-        if constexpr (Accumulate) acc[i] += c[i] + p[i];
+        if constexpr (Acc == 1) acc[i] += c[i] + p[i];
         if constexpr (Clamp) {
             negative += next < 0.0f;
             next = next < 0.0f ? 0.0f : next;
+        }
+        if constexpr (Acc == 2) {  // only cells open_lo <= i < open_hi (CellWindow): an integer mask
+            const float open = static_cast<float>(static_cast<int>(i >= open_lo) & static_cast<int>(i < open_hi));
+            acc[i] += open * ((next - p[i]) * (zp[i] - zm[i]));
         }
         p[i] = next;
         const std::uint32_t bits = abs_bits(next);
@@ -68,12 +76,17 @@ template <bool Clamp, bool Accumulate>
     return top;
 }
 
+// Normal CDF.
+double gauss_cdf(double x) { return 0.5 * std::erfc(-x * 0.7071067811865476); }
+constexpr double kSourceWidths = 4.0;  // a cell's pulse starts and ends this many widths from its time
+constexpr double kSourceBucket = 1.0;  // time span of the injection's buckets
+
 }  // namespace
 
 Simulation::Simulation(const VolumeShape& shape, const Settings& settings)
     : shape_(shape), settings_(settings), cur_(shape.size(), 0.0f), prev_(shape.size(), 0.0f),
-      depth_x_(band_depth(shape.nx, settings.sides == Sides::Zero ? settings.sponge : 0)),
-      depth_y_(band_depth(shape.ny, settings.sides == Sides::Zero ? settings.sponge : 0)),
+      depth_x_(band_depth(shape.nx, settings.side_x() == Sides::Zero ? settings.sponge : 0)),
+      depth_y_(band_depth(shape.ny, settings.side_y() == Sides::Zero ? settings.sponge : 0)),
       depth_z_(band_depth(shape.nz, settings.sponge)),
       row_cur_(static_cast<std::size_t>(shape.ny) * shape.nz, 0), row_prev_(row_cur_),
       zero_row_(static_cast<std::size_t>(shape.nx), 0.0f) {
@@ -108,21 +121,71 @@ void Simulation::set_initial(const std::vector<float>& initial) {
     row_prev_ = row_cur_;
 }
 
+void Simulation::set_source(Source source) {
+    source_ = std::move(source);
+    // Ordered by time bucket, then cell: the injection walks memory in order within a bucket (sorted by
+    // time alone, its writes scatter over the sheet and miss the cache), and the order (so the result)
+    // is fixed.
+    std::sort(source_.cells.begin(), source_.cells.end(), [](const SourceCell& x, const SourceCell& y) {
+        const double bx = std::floor(x.time / kSourceBucket), by = std::floor(y.time / kSourceBucket);
+        return bx != by ? bx < by : x.cell < y.cell;
+    });
+    source_done_ = 0;
+}
+
+double Simulation::source_end() const {
+    double last = -std::numeric_limits<double>::infinity();
+    for (const SourceCell& c : source_.cells) last = std::max(last, static_cast<double>(c.time));
+    return last + kSourceWidths * source_.width;
+}
+
+// Brings every source cell's displacement up to the time of level n (phi^n = cur_), raising phi^n and
+// phi^{n-1} alike (the velocity is unchanged). Buckets whose pulses have not started end the scan,
+// those whose pulses have ended leave it. Serial: the order of
+// the additions, and so the result, does not depend on the thread count.
+void Simulation::inject(int update_top) {
+    if (source_.cells.empty()) return;
+    const double t = steps_ * settings_.courant, t_prev = t - settings_.courant, w = source_.width;
+    const std::size_t layer = static_cast<std::size_t>(shape_.nx) * shape_.ny;
+    const std::size_t end_cell = static_cast<std::size_t>(update_top + 1) * layer;
+    auto bucket_start = [](const SourceCell& c) { return std::floor(c.time / kSourceBucket) * kSourceBucket; };
+    while (source_done_ < source_.cells.size() && bucket_start(source_.cells[source_done_]) + kSourceBucket + kSourceWidths * w < t_prev)
+        ++source_done_;
+    for (std::size_t q = source_done_; q < source_.cells.size(); ++q) {
+        SourceCell& sc = source_.cells[q];
+        if (bucket_start(sc) - kSourceWidths * w > t) break;
+        if (sc.time - kSourceWidths * w > t || sc.time + kSourceWidths * w < t_prev) continue;
+        if (sc.cell >= end_cell) continue;  // above the updated layers (the caller's window keeps them)
+        // The displacement due by time t, less what is in: one CDF per cell and step.
+        const double target = sc.weight * gauss_cdf((t - sc.time) / w);
+        const float d = static_cast<float>(target - sc.injected);
+        sc.injected = target;
+        if (d == 0.0f) continue;
+        cur_[sc.cell] += d;
+        prev_[sc.cell] += d;
+        const std::size_t r = sc.cell / static_cast<std::size_t>(shape_.nx);
+        row_cur_[r] = 1;
+        row_prev_[r] = 1;
+    }
+}
+
 double Simulation::step(std::vector<float>* accumulate, int accumulate_top) {
     const VolumeShape& s = shape_;
     const int nx = s.nx, ny = s.ny, nz = s.nz;
     const std::size_t layer = static_cast<std::size_t>(nx) * ny;
     const std::uint32_t threshold_bits = std::bit_cast<std::uint32_t>(kBandThreshold);
     const bool band = settings_.narrow_band, clamp = settings_.clamp_negative;
-    const Sides sides = settings_.sides;
-    // Levels are accumulated in pairs: the odd steps add phi^n + phi^{n-1}; flush() adds a last odd one.
-    const bool pair = steps_ % 2 == 1;
+    const Sides sides = settings_.side_x(), sides_y = settings_.side_y();
+    const bool flux = settings_.accumulate == Accumulate::Flux;
+    // Sum: levels are accumulated in pairs: the odd steps add phi^n + phi^{n-1}; flush() adds a last
+    // odd one. Flux: every step.
+    const bool pair = flux || steps_ % 2 == 1;
     if (accumulate) pending_ = !pair;
     // The window: layers above accumulate_top no longer accumulate (a layer leaving on an odd step
     // still owes its phi^{n-1}); layers above it + kGuardLayers are set to zero and no longer updated.
     accumulate_top = std::clamp(accumulate_top, -1, nz - 1);
     const int update_top = std::min(nz - 1, accumulate_top + kGuardLayers);
-    if (accumulate && pair)
+    if (accumulate && pair && !flux)
         for (int k = accumulate_top + 1; k <= std::min(accumulate_top_, nz - 1); ++k)
             for (std::size_t c = static_cast<std::size_t>(k) * layer; c < static_cast<std::size_t>(k + 1) * layer; ++c)
                 (*accumulate)[c] += prev_[c];
@@ -135,6 +198,8 @@ double Simulation::step(std::vector<float>* accumulate, int accumulate_top) {
     }
     accumulate_top_ = accumulate_top;
     update_top_ = update_top;
+    inject(update_top);
+    const double time = steps_ * settings_.courant;  // of level n
     // Tiles of kTileRows y rows, each swept along z: the three z layers of a tile stay in cache, so phi^n
     // is read from memory once per step (a z slab's neighbour layers would not fit at 256^3).
     constexpr int kTileRows = 8;
@@ -146,6 +211,7 @@ double Simulation::step(std::vector<float>* accumulate, int accumulate_top) {
     tbb::parallel_for(0, tiles, [&](int t) {
         std::uint32_t top = 0;
         std::int64_t clamped = 0, rows = 0;
+        std::vector<float> saved;
         const int j0 = t * kTileRows, j1 = std::min(ny, j0 + kTileRows);
         for (int k = 0; k <= update_top; ++k)
         for (int j = j0; j < j1; ++j) {
@@ -153,7 +219,7 @@ double Simulation::step(std::vector<float>* accumulate, int accumulate_top) {
             const std::size_t r = kk * ny + j;
             // The y neighbour rows across the y faces: none (zero), the row itself (mirror) or the
             // opposite face's row (periodic).
-            const bool wrap = sides == Sides::Periodic;
+            const bool wrap = sides_y == Sides::Periodic;
             const std::ptrdiff_t dym = j > 0 ? -1 : wrap ? ny - 1 : 0, dyp = j + 1 < ny ? 1 : wrap ? 1 - ny : 0;
             if (band) {
                 const bool near = row_cur_[r] || row_prev_[r] || row_cur_[r + dym] || row_cur_[r + dyp] ||
@@ -162,7 +228,7 @@ double Simulation::step(std::vector<float>* accumulate, int accumulate_top) {
             }
             const std::size_t row = r * nx;
             const float* c = cur_.data() + row;
-            const bool zero_y = sides == Sides::Zero;
+            const bool zero_y = sides_y == Sides::Zero;
             const float* ym = j > 0 || !zero_y ? c + dym * nx : zero_row_.data();
             const float* yp = j + 1 < ny || !zero_y ? c + dyp * nx : zero_row_.data();
             const float* zm = k > 0 ? c - layer : zero_row_.data();
@@ -173,11 +239,48 @@ double Simulation::step(std::vector<float>* accumulate, int accumulate_top) {
             const float* a = coef_.data() + 3 * static_cast<std::size_t>(nx) * dyz;
             const float* b = a + nx;
             const float* l = b + nx;
-            const std::uint32_t row_top =
-                clamp ? (acc ? update_row<true, true>(nx, sides, c, ym, yp, zm, zp, p, acc, a, b, l, clamped)
-                             : update_row<true, false>(nx, sides, c, ym, yp, zm, zp, p, acc, a, b, l, clamped))
-                      : (acc ? update_row<false, true>(nx, sides, c, ym, yp, zm, zp, p, acc, a, b, l, clamped)
-                             : update_row<false, false>(nx, sides, c, ym, yp, zm, zp, p, acc, a, b, l, clamped));
+            const int mode = acc ? (flux ? 2 : 1) : 0;
+            // The row's cells still accumulating (CellWindow): level n stands for the times within half
+            // a step of its own, so a cell whose stop S falls inside that interval takes the fraction
+            // (S - time + dt/2) / dt of its flux (the sub-step interpolation of the stop: a stop
+            // rounded to whole steps would modulate the captured tail with the stop's phase, a ripple
+            // of a few tenths of a percent along a tilted front). [open_lo, open_hi): S > time - dt/2;
+            // among them [part_lo, part_hi): S < time + dt/2.
+            int open_lo = 0, open_hi = nx, part_lo = 0, part_hi = 0;
+            const CellWindow& win = settings_.window;
+            const double half = 0.5 * settings_.courant;
+            const double c0 = std::isfinite(win.s0) ? win.s0 + win.sy * j + win.sz * static_cast<double>(k) - time : 0.0;
+            if (flux && std::isfinite(win.s0)) {
+                auto first_above = [&](double level) {  // the range of i with c0 + sx i > level
+                    if (win.sx > 0.0) return std::pair<int, int>(static_cast<int>(std::clamp(std::floor((level - c0) / win.sx) + 1.0, 0.0, double(nx))), nx);
+                    if (win.sx < 0.0) return std::pair<int, int>(0, static_cast<int>(std::clamp(std::ceil((c0 - level) / -win.sx), 0.0, double(nx))));
+                    return c0 > level ? std::pair<int, int>(0, nx) : std::pair<int, int>(0, 0);
+                };
+                std::tie(open_lo, open_hi) = first_above(-half);
+                const auto [full_lo, full_hi] = first_above(half);
+                // Partial: open but not full (one end of the open range; the whole of it when sx = 0).
+                if (full_lo >= full_hi) part_lo = open_lo, part_hi = open_hi;
+                else if (win.sx > 0.0) part_lo = open_lo, part_hi = std::max(open_lo, full_lo);
+                else part_lo = std::min(open_hi, full_hi), part_hi = open_hi;
+            }
+            saved.clear();
+            if (acc && flux)
+                for (int i = part_lo; i < part_hi; ++i) saved.push_back(p[i]);
+            std::uint32_t row_top;
+            if (clamp)
+                row_top = mode == 2   ? update_row<true, 2>(nx, sides, c, ym, yp, zm, zp, p, acc, a, b, l, open_lo, open_hi, clamped)
+                          : mode == 1 ? update_row<true, 1>(nx, sides, c, ym, yp, zm, zp, p, acc, a, b, l, open_lo, open_hi, clamped)
+                                      : update_row<true, 0>(nx, sides, c, ym, yp, zm, zp, p, acc, a, b, l, open_lo, open_hi, clamped);
+            else
+                row_top = mode == 2   ? update_row<false, 2>(nx, sides, c, ym, yp, zm, zp, p, acc, a, b, l, open_lo, open_hi, clamped)
+                          : mode == 1 ? update_row<false, 1>(nx, sides, c, ym, yp, zm, zp, p, acc, a, b, l, open_lo, open_hi, clamped)
+                                      : update_row<false, 0>(nx, sides, c, ym, yp, zm, zp, p, acc, a, b, l, open_lo, open_hi, clamped);
+            if (acc && flux)
+                for (int i = part_lo; i < part_hi; ++i) {
+                    const float part_flux = (p[i] - saved[static_cast<std::size_t>(i - part_lo)]) * (zp[i] - zm[i]);
+                    const double w = std::clamp((c0 + win.sx * i + half) / settings_.courant, 0.0, 1.0);
+                    acc[i] -= static_cast<float>(1.0 - w) * part_flux;
+                }
             ++rows;
             top = std::max(top, row_top);
             const bool nonzero = !band || row_top > threshold_bits;
@@ -212,21 +315,21 @@ void Simulation::flush(std::vector<float>* accumulate) {
 
 namespace {
 
-double energy_box(const std::vector<float>& a_cur, const std::vector<float>& a_prev, const VolumeShape& sa, Sides sides,
+double energy_box(const std::vector<float>& a_cur, const std::vector<float>& a_prev, const VolumeShape& sa, Sides sides, Sides sides_y,
                   const std::vector<float>* b_cur, const std::vector<float>* b_prev, const VolumeShape* sb,
                   glm::ivec3 lo, glm::ivec3 hi, glm::ivec3 offset, double lam) {
     // Across a's x and y faces: the mirrored cell (mirror) or the wrapped one (periodic).
-    auto side = [sides](int i, int n) {
-        if (sides == Sides::Mirror) return std::clamp(i, 0, n - 1);
-        if (sides == Sides::Periodic) return (i % n + n) % n;
+    auto side = [](Sides kind, int i, int n) {
+        if (kind == Sides::Mirror) return std::clamp(i, 0, n - 1);
+        if (kind == Sides::Periodic) return (i % n + n) % n;
         return i;
     };
     // Field value (difference with b when given); other cells outside the grid of a are zero.
     auto value = [&](const std::vector<float>& av, const std::vector<float>* bv, int i, int j, int k) -> double {
         double v = 0.0;
         if (!bv) {
-            i = side(i, sa.nx);
-            j = side(j, sa.ny);
+            i = side(sides, i, sa.nx);
+            j = side(sides_y, j, sa.ny);
         }
         if (i >= 0 && j >= 0 && k >= 0 && i < sa.nx && j < sa.ny && k < sa.nz) v = av[sa.index(i, j, k)];
         if (bv) {
@@ -248,7 +351,7 @@ double energy_box(const std::vector<float>& a_cur, const std::vector<float>& a_p
                     const double pn = value(a_prev, b_prev, i + e[0], j + e[1], k + e[2]);
                     potential += (u - un) * (p - pn);
                     // Across periodic x and y faces the low face's edge is the high face's, counted there.
-                    const bool wrapped = sides == Sides::Periodic && !e[2];
+                    const bool wrapped = (e[0] && sides == Sides::Periodic) || (e[1] && sides_y == Sides::Periodic);
                     const bool low_face = !wrapped && ((e[0] && i == lo.x) || (e[1] && j == lo.y) || (e[2] && k == lo.z));
                     if (low_face) {
                         const double um = value(a_cur, b_cur, i - e[0], j - e[1], k - e[2]);
@@ -264,13 +367,13 @@ double energy_box(const std::vector<float>& a_cur, const std::vector<float>& a_p
 
 double Simulation::energy() const {
     const double lam = settings_.courant * settings_.courant;
-    return energy_box(cur_, prev_, shape_, settings_.sides, nullptr, nullptr, nullptr, glm::ivec3(0),
+    return energy_box(cur_, prev_, shape_, settings_.side_x(), settings_.side_y(), nullptr, nullptr, nullptr, glm::ivec3(0),
                       glm::ivec3(shape_.nx, shape_.ny, shape_.nz), glm::ivec3(0), lam);
 }
 
 double Simulation::difference_energy(const Simulation& other, glm::ivec3 lo, glm::ivec3 hi, glm::ivec3 offset) const {
     const double lam = settings_.courant * settings_.courant;
-    return energy_box(cur_, prev_, shape_, Sides::Zero, &other.cur_, &other.prev_, &other.shape_, lo, hi, offset, lam);
+    return energy_box(cur_, prev_, shape_, Sides::Zero, Sides::Zero, &other.cur_, &other.prev_, &other.shape_, lo, hi, offset, lam);
 }
 
 }  // namespace caustics::wave
