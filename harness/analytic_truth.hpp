@@ -179,6 +179,24 @@ struct BallLens {
     std::vector<double> radial_irradiance(double r_max, int bins) const;
 };
 
+// Bin averages of a receiver map that depends on the horizontal offset P from `centre` only through
+// f(P) (the radial truths): the mean of f over sub x sub sub-points per bin. NaN where f is.
+template <class F>
+Image bin_average_around(const ReceiverChart& chart, const glm::dvec2& centre, int sub, F f) {
+    Image out(chart.width(), chart.height(), 1);
+    for (int j = 0; j < chart.height(); ++j)
+        for (int i = 0; i < chart.width(); ++i) {
+            double sum = 0.0;
+            for (int b = 0; b < sub; ++b)
+                for (int a = 0; a < sub; ++a) {
+                    const double s = (i + (a + 0.5) / sub) / chart.width(), t = (j + (b + 0.5) / sub) / chart.height();
+                    sum += f(glm::dvec2(chart.point(s, t)) - centre);
+                }
+            out.at(i, j) = static_cast<float>(sum / (sub * sub));
+        }
+    return out;
+}
+
 struct ObjectInstance;
 AnalyticTruth ball_lens_truth(const FrameGeometry& frame, const ReceiverChart& chart, const ObjectInstance& ball);
 AnalyticTruth radial_bump_truth(const FrameGeometry& frame, const ReceiverChart& chart, const ObjectInstance& water);

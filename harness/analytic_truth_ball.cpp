@@ -131,19 +131,9 @@ AnalyticTruth ball_lens_truth(const FrameGeometry& frame, const ReceiverChart& c
     const int bins = static_cast<int>(std::clamp(std::ceil(r_max / (0.25 * sub_spacing)), 64.0, 2.0e6));
     const std::vector<double> E = lens.radial_irradiance(r_max * (1.0 + 1e-9), bins);
     const double w = r_max * (1.0 + 1e-9) / bins;
-    constexpr int kSub = 16;
-    out.receiver = Image(chart.width(), chart.height(), 1);
-    for (int j = 0; j < chart.height(); ++j)
-        for (int i = 0; i < chart.width(); ++i) {
-            double sum = 0.0;
-            for (int b = 0; b < kSub; ++b)
-                for (int a = 0; a < kSub; ++a) {
-                    const double s = (i + (a + 0.5) / kSub) / chart.width(), t = (j + (b + 0.5) / kSub) / chart.height();
-                    const double R = glm::length(glm::dvec2(chart.point(s, t)) - c);
-                    sum += E[static_cast<std::size_t>(std::min(bins - 1, static_cast<int>(R / w)))];
-                }
-            out.receiver.at(i, j) = static_cast<float>(sum / (kSub * kSub));
-        }
+    out.receiver = bin_average_around(chart, c, 16, [&](const glm::dvec2& P) {
+        return E[static_cast<std::size_t>(std::min(bins - 1, static_cast<int>(glm::length(P) / w)))];
+    });
     out.available = true;
     out.kind = "analytic:ball_lens";
     return out;

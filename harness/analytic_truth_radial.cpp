@@ -127,30 +127,22 @@ AnalyticTruth radial_bump_truth(const FrameGeometry& frame, const ReceiverChart&
     }
     // 8 x 8 sub-points per bin: E is smooth before the focus, so the midpoint rule's error is
     // ~(bin / sigma)^2 / 24 / 64, below 1e-4 of E on the shipped scene's 256^2 receiver.
-    constexpr int kSub = 8;
-    out.receiver = Image(chart.width(), chart.height(), 1);
-    for (int j = 0; j < chart.height(); ++j)
-        for (int i = 0; i < chart.width(); ++i) {
-            double sum = 0.0;
-            for (int b = 0; b < kSub; ++b)
-                for (int a = 0; a < kSub; ++a) {
-                    const double s = (i + (a + 0.5) / kSub) / chart.width(), t = (j + (b + 0.5) / kSub) / chart.height();
-                    const glm::dvec2 P = glm::dvec2(chart.point(s, t)) - c;
-                    const double R = glm::length(P);
-                    const double E = prof.irradiance(R);
-                    // The preimage's world point, on the same ray from the axis.
-                    const std::size_t k = static_cast<std::size_t>(
-                        std::upper_bound(prof.R.begin(), prof.R.end(), R) - prof.R.begin());
-                    const double r_pre = prof.r[std::min(k, prof.r.size() - 1)];
-                    const glm::dvec2 src = c + (R > 1e-12 ? P * (r_pre / R) : glm::dvec2(0.0));
-                    if (src.x < lo.x || src.x > hi.x || src.y < lo.y || src.y > hi.y) {
-                        out.reason = "the receiver sees light that entered outside the water's rectangle";
-                        out.receiver = Image();
-                        return out;
-                    }
-                    sum += E;
-                }
-            out.receiver.at(i, j) = static_cast<float>(sum / (kSub * kSub));
+    // A sub-point whose light entered outside the water's rectangle makes the closed form inapplicable.
+    out.receiver = bin_average_around(chart, c, 8, [&](const glm::dvec2& P) {
+        const double R = glm::length(P);
+        // The preimage's world point lies on the same ray from the axis.
+        const std::size_t k =
+            static_cast<std::size_t>(std::upper_bound(prof.R.begin(), prof.R.end(), R) - prof.R.begin());
+        const double r_pre = prof.r[std::min(k, prof.r.size() - 1)];
+        const glm::dvec2 src = c + (R > 1e-12 ? P * (r_pre / R) : glm::dvec2(0.0));
+        if (src.x < lo.x || src.x > hi.x || src.y < lo.y || src.y > hi.y) return std::nan("");
+        return prof.irradiance(R);
+    });
+    for (float v : out.receiver.pixels)
+        if (std::isnan(v)) {
+            out.reason = "the receiver sees light that entered outside the water's rectangle";
+            out.receiver = Image();
+            return out;
         }
     out.available = true;
     out.kind = "analytic:gaussian";

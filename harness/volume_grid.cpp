@@ -281,14 +281,40 @@ double signed_distance_to_interface(const HeightField& hf, const glm::dvec3& p) 
     return gap > 0.0 ? -d : d;
 }
 
-VolumeShape caustic_volume(const FrameGeometry& frame, const ObjectInstance& water, int grid, double margin_fraction) {
-    const HeightField& hf = *water.heightfield;
-    const glm::dvec2 rect_lo = hf.origin, rect_hi = hf.origin + hf.extent();
-    double hmin = 1e300, hmax = -1e300;
+namespace {
+
+// The height range of a height field's vertices.
+void height_range(const HeightField& hf, double& hmin, double& hmax) {
+    hmin = 1e300;
+    hmax = -1e300;
     for (float z : hf.height) {
         hmin = std::min(hmin, double(z));
         hmax = std::max(hmax, double(z));
     }
+}
+
+// Cubic cells of `spacing` over the rectangle [lo, hi], from one cell above the water's highest point
+// (hmax) to one below the lowest receiver (zmin), centred on the rectangle.
+VolumeShape cells_over(const glm::dvec2& lo, const glm::dvec2& hi, double spacing, double hmax, double zmin) {
+    const glm::dvec2 ext = hi - lo;
+    VolumeShape s;
+    s.spacing = spacing;
+    s.nx = std::max(1, static_cast<int>(std::ceil(ext.x / s.spacing - 1e-6)));
+    s.ny = std::max(1, static_cast<int>(std::ceil(ext.y / s.spacing - 1e-6)));
+    const double top = hmax + s.spacing, bottom = zmin - s.spacing;
+    s.nz = std::max(2, static_cast<int>(std::ceil((top - bottom) / s.spacing - 1e-6)));
+    const glm::dvec2 mid = 0.5 * (lo + hi);
+    s.origin = glm::dvec3(mid.x - 0.5 * s.nx * s.spacing, mid.y - 0.5 * s.ny * s.spacing, top - s.nz * s.spacing);
+    return s;
+}
+
+}  // namespace
+
+VolumeShape caustic_volume(const FrameGeometry& frame, const ObjectInstance& water, int grid, double margin_fraction) {
+    const HeightField& hf = *water.heightfield;
+    const glm::dvec2 rect_lo = hf.origin, rect_hi = hf.origin + hf.extent();
+    double hmin = 0.0, hmax = 0.0;
+    height_range(hf, hmin, hmax);
     glm::dvec2 lo(1e300), hi(-1e300);
     double zmin = 1e300;
     for (const ObjectInstance& o : frame.objects) {
@@ -310,28 +336,15 @@ VolumeShape caustic_volume(const FrameGeometry& frame, const ObjectInstance& wat
     if (zmin > 1e299) zmin = hmin - 0.5 * longest;
     lo -= margin_fraction * ext;
     hi += margin_fraction * ext;
-    ext = hi - lo;
-    grid = std::max(grid, 1);
-    VolumeShape s;
-    s.spacing = longest * (1.0 + 2.0 * margin_fraction) / grid;
-    s.nx = std::max(1, static_cast<int>(std::ceil(ext.x / s.spacing - 1e-6)));
-    s.ny = std::max(1, static_cast<int>(std::ceil(ext.y / s.spacing - 1e-6)));
-    const double top = hmax + s.spacing, bottom = zmin - s.spacing;
-    s.nz = std::max(2, static_cast<int>(std::ceil((top - bottom) / s.spacing - 1e-6)));
-    const glm::dvec2 mid = 0.5 * (lo + hi);
-    s.origin = glm::dvec3(mid.x - 0.5 * s.nx * s.spacing, mid.y - 0.5 * s.ny * s.spacing, top - s.nz * s.spacing);
-    return s;
+    return cells_over(lo, hi, longest * (1.0 + 2.0 * margin_fraction) / std::max(grid, 1), hmax, zmin);
 }
 
 VolumeShape caustic_volume_along(const FrameGeometry& frame, const ObjectInstance& water, int grid,
                                  const glm::dvec3& refracted, double spread, double margin_fraction) {
     const HeightField& hf = *water.heightfield;
     const glm::dvec2 rect_lo = hf.origin, rect_hi = hf.origin + hf.extent();
-    double hmin = 1e300, hmax = -1e300;
-    for (float z : hf.height) {
-        hmin = std::min(hmin, double(z));
-        hmax = std::max(hmax, double(z));
-    }
+    double hmin = 0.0, hmax = 0.0;
+    height_range(hf, hmin, hmax);
     // Horizontal run of a ray per metre of depth.
     const glm::dvec2 run = glm::dvec2(refracted) / std::max(-refracted.z, 1e-6);
     glm::dvec2 lo(1e300), hi(-1e300);
@@ -362,16 +375,7 @@ VolumeShape caustic_volume_along(const FrameGeometry& frame, const ObjectInstanc
     }
     lo -= margin_fraction * footprint;
     hi += margin_fraction * footprint;
-    const glm::dvec2 ext = hi - lo;
-    VolumeShape s;
-    s.spacing = longest * (1.0 + 2.0 * margin_fraction) / std::max(grid, 1);
-    s.nx = std::max(1, static_cast<int>(std::ceil(ext.x / s.spacing - 1e-6)));
-    s.ny = std::max(1, static_cast<int>(std::ceil(ext.y / s.spacing - 1e-6)));
-    const double top = hmax + s.spacing, bottom = zmin - s.spacing;
-    s.nz = std::max(2, static_cast<int>(std::ceil((top - bottom) / s.spacing - 1e-6)));
-    const glm::dvec2 mid = 0.5 * (lo + hi);
-    s.origin = glm::dvec3(mid.x - 0.5 * s.nx * s.spacing, mid.y - 0.5 * s.ny * s.spacing, top - s.nz * s.spacing);
-    return s;
+    return cells_over(lo, hi, longest * (1.0 + 2.0 * margin_fraction) / std::max(grid, 1), hmax, zmin);
 }
 
 }  // namespace caustics

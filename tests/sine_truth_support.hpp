@@ -158,6 +158,25 @@ inline ZTest z_test(const Columns& ref, const std::vector<double>& truth, int sk
     return t;
 }
 
+// Per-bin Student-t of a reference against an expected map: the largest |ref - expected| / se over the bins
+// with a positive standard error (`compared` of them), and the Sidak-corrected threshold at kFamilyAlpha.
+struct BinTest {
+    double worst = 0.0, threshold = 0.0;
+    int compared = 0;
+};
+inline BinTest bin_test(const ReferenceResult& ref, const Image& expected) {
+    BinTest t;
+    for (std::size_t i = 0; i < expected.pixels.size(); ++i) {
+        const double se = ref.receiver_stderr.pixels[i];
+        if (se <= 0.0) continue;
+        ++t.compared;
+        t.worst = std::max(t.worst, std::fabs(ref.receiver.pixels[i] - expected.pixels[i]) / se);
+    }
+    t.threshold = student_t_critical(sidak_level(kFamilyAlpha, static_cast<std::size_t>(std::max(t.compared, 1))),
+                                     ref.replicas - 1.0);
+    return t;
+}
+
 inline AnalyticTruth truth_of(const SineSetup& c) {
     TracedScene setup(make_sine_scene(c));
     return analytic_truth(*setup.frame, *setup.chart);

@@ -53,33 +53,19 @@ TEST(BallLensTruth, BinsWithinTheReferenceStandardErrorAndWrongIorRejected) {
 
     const ReferenceResult ref = test_support::run_reference(setup, 4'000'000);
     ASSERT_GE(ref.replicas, 2);
-    auto worst_t = [&](const Image& expected, int& compared) {
-        double worst = 0.0;
-        compared = 0;
-        for (std::size_t i = 0; i < expected.pixels.size(); ++i) {
-            const double se = ref.receiver_stderr.pixels[i];
-            if (se <= 0.0) continue;
-            ++compared;
-            worst = std::max(worst, std::fabs(ref.receiver.pixels[i] - expected.pixels[i]) / se);
-        }
-        return worst;
-    };
-    int compared = 0;
-    const double t = worst_t(truth.receiver, compared);
-    const double threshold = student_t_critical(
-        sidak_level(test_support::kFamilyAlpha, static_cast<std::size_t>(compared)), ref.replicas - 1.0);
-    EXPECT_GT(compared, 32 * 32 / 2);
-    EXPECT_LE(t, threshold) << "a bin's reference differs from the truth beyond its standard error";
+    const test_support::BinTest t = test_support::bin_test(ref, truth.receiver);
+    EXPECT_GT(t.compared, 32 * 32 / 2);
+    EXPECT_LE(t.worst, t.threshold) << "a bin's reference differs from the truth beyond its standard error";
 
     test_support::BallLens wrong = b;
     wrong.ior = 1.47;
     const TracedScene wrong_setup(wrong.scene());
     const AnalyticTruth bad = analytic_truth(*wrong_setup.frame, *wrong_setup.chart);
     ASSERT_TRUE(bad.available) << bad.reason;
-    const double tb = worst_t(bad.receiver, compared);
-    EXPECT_GT(tb, threshold) << "a truth with ior 1.47 was not rejected";
-    std::printf("ball lens: max |t| %.2f over %d bins (threshold %.2f), ior 1.47 truth: max |t| %.1f\n", t, compared,
-                threshold, tb);
+    const test_support::BinTest tb = test_support::bin_test(ref, bad.receiver);
+    EXPECT_GT(tb.worst, t.threshold) << "a truth with ior 1.47 was not rejected";
+    std::printf("ball lens: max |t| %.2f over %d bins (threshold %.2f), ior 1.47 truth: max |t| %.1f\n", t.worst,
+                t.compared, t.threshold, tb.worst);
 }
 
 TEST(BallLensTruth, SaysWhyItDoesNotApply) {

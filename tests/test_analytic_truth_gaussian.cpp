@@ -42,33 +42,19 @@ TEST(GaussianTruth, BinsWithinTheReferenceStandardErrorAndWrongIorRejected) {
 
     const ReferenceResult ref = run_reference(setup, 4'000'000);
     ASSERT_GE(ref.replicas, 2);
-    auto worst_t = [&](const Image& expected, int& compared) {
-        double worst = 0.0;
-        compared = 0;
-        for (std::size_t i = 0; i < expected.pixels.size(); ++i) {
-            const double se = ref.receiver_stderr.pixels[i];
-            if (se <= 0.0) continue;
-            ++compared;
-            worst = std::max(worst, std::fabs(ref.receiver.pixels[i] - expected.pixels[i]) / se);
-        }
-        return worst;
-    };
-    int compared = 0;
-    const double t = worst_t(truth.receiver, compared);
-    const double threshold = student_t_critical(sidak_level(kFamilyAlpha, static_cast<std::size_t>(compared)),
-                                                ref.replicas - 1.0);
-    EXPECT_EQ(compared, 32 * 32);
-    EXPECT_LE(t, threshold) << "a bin's reference differs from the truth beyond its standard error";
+    const BinTest t = bin_test(ref, truth.receiver);
+    EXPECT_EQ(t.compared, 32 * 32);
+    EXPECT_LE(t.worst, t.threshold) << "a bin's reference differs from the truth beyond its standard error";
 
     Scene wrong = s;
     water_of(wrong).material.ior = 1.30;
     const TracedScene wrong_setup(wrong);
     const AnalyticTruth bad = analytic_truth(*wrong_setup.frame, *wrong_setup.chart);
     ASSERT_TRUE(bad.available) << bad.reason;
-    const double tb = worst_t(bad.receiver, compared);
-    EXPECT_GT(tb, threshold) << "a truth with ior 1.30 was not rejected";
-    std::printf("gaussian: max |t| %.2f over %d bins (threshold %.2f), ior 1.30 truth: max |t| %.1f\n", t, compared,
-                threshold, tb);
+    const BinTest tb = bin_test(ref, bad.receiver);
+    EXPECT_GT(tb.worst, t.threshold) << "a truth with ior 1.30 was not rejected";
+    std::printf("gaussian: max |t| %.2f over %d bins (threshold %.2f), ior 1.30 truth: max |t| %.1f\n", t.worst,
+                t.compared, t.threshold, tb.worst);
 }
 
 TEST(GaussianTruth, AxisMatchesTheParaxialClosedForm) {
