@@ -55,6 +55,7 @@ Settings settings_from(const ParamSet& p);
 // first focus, kPastFocusFactor past it (folds).
 constexpr double kMaxTiltDeg = 45.0, kBeforeFocusFactor = 0.15, kPastFocusFactor = 0.5;
 constexpr int kMinGrid = 64;
+constexpr int kMinApproxIterations = 3;   // the approximate estimator's claim under tilted light
 AccuracyClaim claim_for(const FrameGeometry& frame, const Settings& s);
 MethodInfo caustic_mapping_info();
 std::unique_ptr<Method> make_caustic_mapping(const ParamSet& p);
