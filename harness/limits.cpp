@@ -111,22 +111,16 @@ const MemoryItem* MemoryEstimate::largest() const {
 
 MemoryEstimate estimate_scene_memory(const Scene& scene, int replicas, int threads) {
     MemoryEstimate e;
-    {
-        const double bins = static_cast<double>(scene.receiver.width) * scene.receiver.height;
-        const double per = reference_bytes_per_bin(replicas, threads);
-        e.items.push_back({"receiver.resolution",
-                           "receiver " + times(scene.receiver.width, scene.receiver.height) + " bins x " +
-                               format_limit(per) + " B",
-                           bins * per, per, "bins"});
-    }
-    {
-        const double pixels = static_cast<double>(scene.camera.width) * scene.camera.height;
-        const double per = reference_bytes_per_pixel(replicas, threads);
-        e.items.push_back({"camera.width",
-                           "camera " + times(scene.camera.width, scene.camera.height) + " pixels x " +
-                               format_limit(per) + " B",
-                           pixels * per, per, "pixels"});
-    }
+    // A width x height grid of `unit` costing `per` bytes each, set by the scene key `key`.
+    auto grid = [&e](const char* key, const char* name, const char* unit, int width, int height, double per) {
+        e.items.push_back({key,
+                           std::string(name) + " " + times(width, height) + " " + unit + " x " + format_limit(per) + " B",
+                           static_cast<double>(width) * height * per, per, unit});
+    };
+    grid("receiver.resolution", "receiver", "bins", scene.receiver.width, scene.receiver.height,
+         reference_bytes_per_bin(replicas, threads));
+    grid("camera.width", "camera", "pixels", scene.camera.width, scene.camera.height,
+         reference_bytes_per_pixel(replicas, threads));
     for (std::size_t k = 0; k < scene.objects.size(); ++k) {
         const Object& o = scene.objects[k];
         if (o.shape == ShapeType::HeightField) {

@@ -44,7 +44,7 @@ RasterStats TriangleRaster::draw(const RasterTriangles& batch, const RasterOptio
     const auto& tris = batch.triangles;
     const std::size_t npos = pos.size();
 
-    // A structured grid (g x g vertices, as the surface grids of caustic_triangles) in Area mode without
+    // A structured grid (g x g vertices, as a height-field method's surface grid) in Area mode without
     // wrap takes the shared-edge path (draw_grid).
     if (area && !m.wrap && ntri > 0) {
         const auto g = static_cast<std::size_t>(std::llround(std::sqrt(static_cast<double>(npos))));

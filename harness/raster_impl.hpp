@@ -124,7 +124,7 @@ struct TriangleRaster::Impl {
     }
 
     // Whether the triangles are those of a g x g vertex grid, cells (i, j) split into {v00, v10, v11},
-    // {v00, v11, v01} in row order (the surface grids of caustic_triangles).
+    // {v00, v11, v01} in row order (a height-field method's surface grid).
     bool is_grid(std::span<const glm::uvec3> tris, unsigned g) {
         const std::size_t chunks = (tris.size() + kChunk - 1) / kChunk;
         chunk_grid.assign(chunks, 0);

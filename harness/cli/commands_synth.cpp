@@ -52,7 +52,7 @@ Command make_synth_command() {
         SynthOptions& o = a->options;
         add_scene_argument(app, o.scene_path, "Scene file, or a scene name in scenes/ (e.g. ocean_tile); its water "
                                               "surface must use the periodic 'noise' generator")->required();
-        add_method_option(app, o.method, "Method name; it must synthesise periodic textures (caustic_triangles, wave_optics)")
+        add_method_option(app, o.method, "Method name; it must synthesise periodic textures (one that cannot is refused with its reason)")
             ->required();
         add_integer_option(app, "--frames", o.frames, 1, 10000, "Frames per time period (frame i at time i * period / frames)")
             ->capture_default_str();
