@@ -13,13 +13,13 @@
 
 #include <tbb/global_control.h>
 
-#include "camera.hpp"
-#include "frame.hpp"
-#include "gbuffer_raster.hpp"
-#include "ray_tracer.hpp"
-#include "receiver_chart.hpp"
-#include "registry.hpp"
-#include "splat.hpp"
+#include <caustics/frame/camera.hpp>
+#include <caustics/frame/frame.hpp>
+#include <caustics/blocks/gbuffer/gbuffer_raster.hpp>
+#include <caustics/frame/ray_tracer.hpp>
+#include <caustics/frame/receiver_chart.hpp>
+#include <caustics/api/registry.hpp>
+#include <caustics/blocks/splat/splat.hpp>
 
 using namespace caustics;
 

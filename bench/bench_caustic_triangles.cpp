@@ -8,11 +8,11 @@
 
 #include <tbb/global_control.h>
 
-#include "camera.hpp"
-#include "frame.hpp"
-#include "ray_tracer.hpp"
-#include "receiver_chart.hpp"
-#include "registry.hpp"
+#include <caustics/frame/camera.hpp>
+#include <caustics/frame/frame.hpp>
+#include <caustics/frame/ray_tracer.hpp>
+#include <caustics/frame/receiver_chart.hpp>
+#include <caustics/api/registry.hpp>
 
 using namespace caustics;
 

@@ -22,13 +22,13 @@
 #include <tbb/info.h>
 #include <tbb/parallel_reduce.h>
 
-#include "camera.hpp"
-#include "frame.hpp"
-#include "ray_tracer.hpp"
-#include "receiver_chart.hpp"
-#include "reference.hpp"
-#include "reference_rays.hpp"
-#include "scene.hpp"
+#include <caustics/frame/camera.hpp>
+#include <caustics/frame/frame.hpp>
+#include <caustics/frame/ray_tracer.hpp>
+#include <caustics/frame/receiver_chart.hpp>
+#include <caustics/reference/reference.hpp>
+#include <caustics/reference/reference_rays.hpp>
+#include <caustics/scene/scene.hpp>
 
 using namespace caustics;
 

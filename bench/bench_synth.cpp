@@ -17,7 +17,7 @@
 #include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
 
-#include "synth.hpp"
+#include <caustics/synth/synth.hpp>
 
 using namespace caustics;
 

@@ -12,11 +12,11 @@
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
 
-#include "frame.hpp"
-#include "receiver_chart.hpp"
-#include "registry.hpp"
-#include "scene.hpp"
-#include "water_scene.hpp"
+#include <caustics/frame/frame.hpp>
+#include <caustics/frame/receiver_chart.hpp>
+#include <caustics/api/registry.hpp>
+#include <caustics/scene/scene.hpp>
+#include <caustics/scene/water_scene.hpp>
 
 namespace {
 

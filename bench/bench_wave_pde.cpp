@@ -14,13 +14,13 @@
 #include <memory>
 #include <string>
 
-#include "camera.hpp"
-#include "frame.hpp"
-#include "ray_tracer.hpp"
-#include "receiver_chart.hpp"
-#include "registry.hpp"
+#include <caustics/frame/camera.hpp>
+#include <caustics/frame/frame.hpp>
+#include <caustics/frame/ray_tracer.hpp>
+#include <caustics/frame/receiver_chart.hpp>
+#include <caustics/api/registry.hpp>
 #include "pool_cube.hpp"
-#include "scene.hpp"
+#include <caustics/scene/scene.hpp>
 
 using namespace caustics;
 

@@ -10,12 +10,12 @@
 #include <memory>
 #include <string>
 
-#include "camera.hpp"
-#include "frame.hpp"
-#include "ray_tracer.hpp"
-#include "receiver_chart.hpp"
-#include "registry.hpp"
-#include "scene.hpp"
+#include <caustics/frame/camera.hpp>
+#include <caustics/frame/frame.hpp>
+#include <caustics/frame/ray_tracer.hpp>
+#include <caustics/frame/receiver_chart.hpp>
+#include <caustics/api/registry.hpp>
+#include <caustics/scene/scene.hpp>
 
 namespace caustics::bench {
 

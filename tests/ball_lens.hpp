@@ -11,7 +11,7 @@
 
 #include <glm/glm.hpp>
 
-#include "scene.hpp"
+#include <caustics/scene/scene.hpp>
 
 namespace caustics::test_support {
 

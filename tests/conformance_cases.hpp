@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "scene.hpp"
+#include <caustics/scene/scene.hpp>
 
 namespace caustics::test_support {
 

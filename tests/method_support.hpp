@@ -6,13 +6,13 @@
 
 #include <gtest/gtest.h>
 
-#include "camera.hpp"
-#include "frame.hpp"
-#include "method.hpp"
-#include "params.hpp"
-#include "receiver_chart.hpp"
-#include "registry.hpp"
-#include "scene.hpp"
+#include <caustics/frame/camera.hpp>
+#include <caustics/frame/frame.hpp>
+#include <caustics/api/method.hpp>
+#include <caustics/api/params.hpp>
+#include <caustics/frame/receiver_chart.hpp>
+#include <caustics/api/registry.hpp>
+#include <caustics/scene/scene.hpp>
 
 namespace caustics::test_support {
 

@@ -9,10 +9,10 @@
 #include <string>
 #include <vector>
 
-#include "analytic_truth.hpp"
+#include <caustics/reference/analytic_truth.hpp>
 #include "reference_support.hpp"
-#include "statistics.hpp"
-#include "water_scene.hpp"
+#include <caustics/util/statistics.hpp>
+#include <caustics/scene/water_scene.hpp>
 
 namespace caustics::test_support {
 

@@ -18,8 +18,8 @@
 
 #include <gtest/gtest.h>
 
-#include "analytic_truth.hpp"
-#include "baseline.hpp"
+#include <caustics/reference/analytic_truth.hpp>
+#include <caustics/frame/baseline.hpp>
 #include "sine_truth_support.hpp"
 
 using namespace caustics;

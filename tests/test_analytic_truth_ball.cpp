@@ -9,7 +9,7 @@
 
 #include <gtest/gtest.h>
 
-#include "analytic_truth.hpp"
+#include <caustics/reference/analytic_truth.hpp>
 #include "ball_lens.hpp"
 #include "sine_truth_support.hpp"
 

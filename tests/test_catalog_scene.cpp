@@ -21,12 +21,12 @@
 #include <nlohmann/json.hpp>
 
 #include "catalog_support.hpp"
-#include "errors.hpp"
-#include "frame.hpp"
-#include "limits.hpp"
-#include "ray_tracer.hpp"
-#include "reference.hpp"
-#include "scene.hpp"
+#include <caustics/util/errors.hpp>
+#include <caustics/frame/frame.hpp>
+#include <caustics/scene/limits.hpp>
+#include <caustics/frame/ray_tracer.hpp>
+#include <caustics/reference/reference.hpp>
+#include <caustics/scene/scene.hpp>
 
 namespace {
 

@@ -17,7 +17,7 @@
 #include <thread>
 
 #include "catalog_support.hpp"
-#include "report_front.hpp"
+#include <caustics/report/report_front.hpp>
 
 namespace fs = std::filesystem;
 using nlohmann::json;

@@ -24,12 +24,12 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
-#include "analytic_truth.hpp"
-#include "baseline.hpp"
+#include <caustics/reference/analytic_truth.hpp>
+#include <caustics/frame/baseline.hpp>
 #include "conformance_cases.hpp"
-#include "metrics.hpp"
-#include "registry.hpp"
-#include "run_errors.hpp"
+#include <caustics/run/metrics.hpp>
+#include <caustics/api/registry.hpp>
+#include <caustics/run/run_errors.hpp>
 
 namespace caustics {
 namespace {

@@ -7,7 +7,7 @@
 
 #include <gtest/gtest.h>
 
-#include "fft.hpp"
+#include <caustics/blocks/fft/fft.hpp>
 #include "naive_dft.hpp"
 
 namespace caustics {

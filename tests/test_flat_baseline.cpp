@@ -9,7 +9,7 @@
 
 #include <gtest/gtest.h>
 
-#include "baseline.hpp"
+#include <caustics/frame/baseline.hpp>
 #include "sine_truth_support.hpp"
 
 using namespace caustics;

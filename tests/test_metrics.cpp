@@ -5,7 +5,7 @@
 
 #include <gtest/gtest.h>
 
-#include "metrics.hpp"
+#include <caustics/run/metrics.hpp>
 
 using namespace caustics;
 

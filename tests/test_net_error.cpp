@@ -8,8 +8,8 @@
 
 #include <gtest/gtest.h>
 
-#include "net_error.hpp"
-#include "statistics.hpp"
+#include <caustics/run/net_error.hpp>
+#include <caustics/util/statistics.hpp>
 
 using namespace caustics;
 

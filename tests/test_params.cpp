@@ -1,8 +1,8 @@
 #include <gtest/gtest.h>
 
-#include "errors.hpp"
-#include "params.hpp"
-#include "timing.hpp"
+#include <caustics/util/errors.hpp>
+#include <caustics/api/params.hpp>
+#include <caustics/util/timing.hpp>
 
 using namespace caustics;
 

@@ -9,7 +9,7 @@
 
 #include <tbb/global_control.h>
 
-#include "raster.hpp"
+#include <caustics/blocks/raster/raster.hpp>
 
 using namespace caustics;
 

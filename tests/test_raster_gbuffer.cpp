@@ -11,9 +11,9 @@
 
 #include <tbb/global_control.h>
 
-#include "gbuffer_raster.hpp"
-#include "light_projection.hpp"
-#include "splat.hpp"
+#include <caustics/blocks/gbuffer/gbuffer_raster.hpp>
+#include <caustics/blocks/gbuffer/light_projection.hpp>
+#include <caustics/blocks/splat/splat.hpp>
 
 using namespace caustics;
 

@@ -25,17 +25,17 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
-#include "analytic_truth.hpp"
+#include <caustics/reference/analytic_truth.hpp>
 #include "ball_lens.hpp"
 #include "reference_support.hpp"
-#include "camera.hpp"
-#include "frame.hpp"
-#include "hash.hpp"
-#include "ray_tracer.hpp"
-#include "receiver_chart.hpp"
-#include "reference.hpp"
-#include "scene.hpp"
-#include "statistics.hpp"
+#include <caustics/frame/camera.hpp>
+#include <caustics/frame/frame.hpp>
+#include <caustics/util/hash.hpp>
+#include <caustics/frame/ray_tracer.hpp>
+#include <caustics/frame/receiver_chart.hpp>
+#include <caustics/reference/reference.hpp>
+#include <caustics/scene/scene.hpp>
+#include <caustics/util/statistics.hpp>
 
 namespace fs = std::filesystem;
 using namespace caustics;

@@ -9,11 +9,11 @@
 
 #include <gtest/gtest.h>
 
-#include "reference.hpp"
+#include <caustics/reference/reference.hpp>
 #include "reference_support.hpp"
-#include "scene.hpp"
+#include <caustics/scene/scene.hpp>
 #include "test_support.hpp"
-#include "water_scene.hpp"
+#include <caustics/scene/water_scene.hpp>
 
 namespace fs = std::filesystem;
 using namespace caustics;

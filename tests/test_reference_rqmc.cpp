@@ -13,8 +13,8 @@
 
 #include <gtest/gtest.h>
 
-#include "photon_sampler.hpp"
-#include "reference.hpp"
+#include <caustics/reference/photon_sampler.hpp>
+#include <caustics/reference/reference.hpp>
 #include "reference_support.hpp"
 #include "test_support.hpp"
 

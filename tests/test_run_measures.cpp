@@ -9,11 +9,11 @@
 
 #include <gtest/gtest.h>
 
-#include "analytic_truth.hpp"
-#include "baseline.hpp"
-#include "render_run.hpp"
-#include "run_errors.hpp"
-#include "timing.hpp"
+#include <caustics/reference/analytic_truth.hpp>
+#include <caustics/frame/baseline.hpp>
+#include <caustics/run/render_run.hpp>
+#include <caustics/run/run_errors.hpp>
+#include <caustics/util/timing.hpp>
 
 using namespace caustics;
 

@@ -11,11 +11,11 @@
 
 #include <gtest/gtest.h>
 
-#include "errors.hpp"
-#include "frame.hpp"
-#include "heightfield.hpp"
-#include "receiver_chart.hpp"
-#include "scene.hpp"
+#include <caustics/util/errors.hpp>
+#include <caustics/frame/frame.hpp>
+#include <caustics/scene/heightfield/heightfield.hpp>
+#include <caustics/frame/receiver_chart.hpp>
+#include <caustics/scene/scene.hpp>
 
 namespace fs = std::filesystem;
 using namespace caustics;

@@ -15,10 +15,10 @@
 #include <OpenImageIO/imageio.h>
 #include <nlohmann/json.hpp>
 
-#include "errors.hpp"
-#include "frame.hpp"
-#include "heightfield.hpp"
-#include "scene.hpp"
+#include <caustics/util/errors.hpp>
+#include <caustics/frame/frame.hpp>
+#include <caustics/scene/heightfield/heightfield.hpp>
+#include <caustics/scene/scene.hpp>
 
 namespace fs = std::filesystem;
 using namespace caustics;

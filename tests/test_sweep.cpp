@@ -14,9 +14,9 @@
 #include <sstream>
 #include <thread>
 
-#include "errors.hpp"
-#include "sweep.hpp"
-#include "sweep_spec.hpp"
+#include <caustics/util/errors.hpp>
+#include <caustics/sweep/sweep.hpp>
+#include <caustics/sweep/sweep_spec.hpp>
 #include "test_support.hpp"
 
 using namespace caustics;

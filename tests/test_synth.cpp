@@ -18,9 +18,9 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "errors.hpp"
-#include "image_io.hpp"
-#include "synth.hpp"
+#include <caustics/util/errors.hpp>
+#include <caustics/util/image_io.hpp>
+#include <caustics/synth/synth.hpp>
 #include "test_support.hpp"
 
 namespace fs = std::filesystem;

@@ -5,10 +5,10 @@
 #include <cmath>
 #include <vector>
 
-#include "camera.hpp"
-#include "frame.hpp"
-#include "volume_lookup.hpp"
-#include "water_scene.hpp"
+#include <caustics/frame/camera.hpp>
+#include <caustics/frame/frame.hpp>
+#include <caustics/blocks/volume/volume_lookup.hpp>
+#include <caustics/scene/water_scene.hpp>
 
 using namespace caustics;
 

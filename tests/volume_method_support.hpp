@@ -7,10 +7,10 @@
 
 #include <glm/glm.hpp>
 
-#include "camera.hpp"
+#include <caustics/frame/camera.hpp>
 #include "method_support.hpp"
-#include "scene.hpp"
-#include "water_scene.hpp"
+#include <caustics/scene/scene.hpp>
+#include <caustics/scene/water_scene.hpp>
 
 namespace caustics::test_support {
 

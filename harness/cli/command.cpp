@@ -2,8 +2,8 @@
 
 #include <algorithm>
 
-#include "errors.hpp"
-#include "params.hpp"
+#include <caustics/util/errors.hpp>
+#include <caustics/api/params.hpp>
 
 namespace caustics::cli {
 namespace {

@@ -11,8 +11,8 @@
 #include <CLI/CLI.hpp>
 
 #include "options.hpp"
-#include "photon_sampler.hpp"
-#include "reference.hpp"
+#include <caustics/reference/photon_sampler.hpp>
+#include <caustics/reference/reference.hpp>
 
 namespace caustics::cli {
 

@@ -10,8 +10,8 @@
 #include <nlohmann/json.hpp>
 
 #include "command.hpp"
-#include "registry.hpp"
-#include "render_run.hpp"
+#include <caustics/api/registry.hpp>
+#include <caustics/run/render_run.hpp>
 
 namespace caustics::cli {
 namespace {

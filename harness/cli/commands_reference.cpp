@@ -5,8 +5,8 @@
 #include <memory>
 
 #include "command.hpp"
-#include "reference.hpp"
-#include "render_run.hpp"
+#include <caustics/reference/reference.hpp>
+#include <caustics/run/render_run.hpp>
 
 namespace caustics::cli {
 namespace {

@@ -7,7 +7,7 @@
 #include <memory>
 
 #include "command.hpp"
-#include "render_run.hpp"
+#include <caustics/run/render_run.hpp>
 
 namespace caustics::cli {
 namespace {

@@ -2,7 +2,7 @@
 #include <memory>
 
 #include "command.hpp"
-#include "report_front.hpp"
+#include <caustics/report/report_front.hpp>
 
 namespace caustics::cli {
 namespace {

@@ -4,7 +4,7 @@
 #include <memory>
 
 #include "command.hpp"
-#include "sweep.hpp"
+#include <caustics/sweep/sweep.hpp>
 
 namespace caustics::cli {
 namespace {

@@ -5,8 +5,8 @@
 #include <memory>
 
 #include "command.hpp"
-#include "render_run.hpp"
-#include "synth.hpp"
+#include <caustics/run/render_run.hpp>
+#include <caustics/synth/synth.hpp>
 
 namespace caustics::cli {
 namespace {

@@ -13,7 +13,7 @@
 #include <CLI/CLI.hpp>
 
 #include "command.hpp"
-#include "errors.hpp"
+#include <caustics/util/errors.hpp>
 #include "usage_errors.hpp"
 
 namespace {

@@ -13,9 +13,9 @@
 #include <map>
 #include <system_error>
 
-#include "errors.hpp"
-#include "registry.hpp"
-#include "render_run.hpp"
+#include <caustics/util/errors.hpp>
+#include <caustics/api/registry.hpp>
+#include <caustics/run/render_run.hpp>
 
 namespace caustics::cli {
 namespace {

@@ -24,7 +24,7 @@
 #include "elliptic_splats.hpp"
 #include "lookup.hpp"
 #include "splats.hpp"
-#include "timing.hpp"
+#include <caustics/util/timing.hpp>
 
 namespace caustics::caustic_mapping {
 

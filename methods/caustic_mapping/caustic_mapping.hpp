@@ -8,9 +8,9 @@
 
 #include "estimator.hpp"
 #include "geometry.hpp"
-#include "method.hpp"
+#include <caustics/api/method.hpp>
 #include "positions_texture.hpp"
-#include "splat.hpp"
+#include <caustics/blocks/splat/splat.hpp>
 
 namespace caustics::caustic_mapping {
 

@@ -20,8 +20,8 @@
 
 #include <glm/glm.hpp>
 
-#include "image.hpp"
-#include "splat.hpp"
+#include <caustics/util/image.hpp>
+#include <caustics/blocks/splat/splat.hpp>
 #include "splats.hpp"
 
 namespace caustics::caustic_mapping {

@@ -7,9 +7,9 @@
 
 #include <glm/glm.hpp>
 
-#include "frame.hpp"
-#include "gbuffer_raster.hpp"
-#include "light_projection.hpp"
+#include <caustics/frame/frame.hpp>
+#include <caustics/blocks/gbuffer/gbuffer_raster.hpp>
+#include <caustics/blocks/gbuffer/light_projection.hpp>
 
 namespace caustics::caustic_mapping {
 

@@ -13,10 +13,10 @@
 
 #include <glm/glm.hpp>
 
-#include "camera.hpp"
-#include "image.hpp"
+#include <caustics/frame/camera.hpp>
+#include <caustics/util/image.hpp>
 #include "positions_texture.hpp"
-#include "receiver_chart.hpp"
+#include <caustics/frame/receiver_chart.hpp>
 
 namespace caustics::caustic_mapping {
 

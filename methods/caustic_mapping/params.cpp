@@ -4,7 +4,7 @@
 #include <string>
 
 #include "caustic_mapping.hpp"
-#include "registry.hpp"
+#include <caustics/api/registry.hpp>
 
 namespace caustics::caustic_mapping {
 

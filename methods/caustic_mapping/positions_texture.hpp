@@ -12,8 +12,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-#include "gbuffer_raster.hpp"
-#include "light_projection.hpp"
+#include <caustics/blocks/gbuffer/gbuffer_raster.hpp>
+#include <caustics/blocks/gbuffer/light_projection.hpp>
 
 namespace caustics::caustic_mapping {
 

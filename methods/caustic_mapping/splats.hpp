@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "splat.hpp"
+#include <caustics/blocks/splat/splat.hpp>
 
 namespace caustics::caustic_mapping {
 

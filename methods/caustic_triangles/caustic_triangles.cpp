@@ -20,11 +20,11 @@
 #include <tbb/parallel_for.h>
 
 #include "caustic_triangles.hpp"
-#include "method.hpp"
-#include "raster.hpp"
-#include "registry.hpp"
+#include <caustics/api/method.hpp>
+#include <caustics/blocks/raster/raster.hpp>
+#include <caustics/api/registry.hpp>
 #include "spectral_ramp.hpp"
-#include "timing.hpp"
+#include <caustics/util/timing.hpp>
 
 namespace caustics {
 namespace caustic_triangles {

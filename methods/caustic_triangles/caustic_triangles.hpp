@@ -7,11 +7,11 @@
 
 #include <glm/glm.hpp>
 
-#include "frame.hpp"
-#include "method.hpp"
-#include "params.hpp"
-#include "raster.hpp"
-#include "receiver_chart.hpp"
+#include <caustics/frame/frame.hpp>
+#include <caustics/api/method.hpp>
+#include <caustics/api/params.hpp>
+#include <caustics/blocks/raster/raster.hpp>
+#include <caustics/frame/receiver_chart.hpp>
 
 namespace caustics::caustic_triangles {
 

@@ -31,11 +31,11 @@
 #include "eikonal_focus.hpp"
 #include "eikonal_solver.hpp"
 #include "eikonal_transport.hpp"
-#include "errors.hpp"
-#include "registry.hpp"
-#include "timing.hpp"
-#include "volume_grid.hpp"
-#include "volume_texture_method.hpp"
+#include <caustics/util/errors.hpp>
+#include <caustics/api/registry.hpp>
+#include <caustics/util/timing.hpp>
+#include <caustics/blocks/volume/volume_grid.hpp>
+#include <caustics/blocks/volume/volume_texture_method.hpp>
 
 namespace caustics {
 namespace {

@@ -6,7 +6,7 @@
 
 #include <glm/glm.hpp>
 
-#include "heightfield.hpp"
+#include <caustics/scene/heightfield/heightfield.hpp>
 
 namespace caustics::eikonal {
 

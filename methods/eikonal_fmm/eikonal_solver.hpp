@@ -6,8 +6,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "heightfield.hpp"
-#include "volume_grid.hpp"
+#include <caustics/scene/heightfield/heightfield.hpp>
+#include <caustics/blocks/volume/volume_grid.hpp>
 
 namespace caustics::eikonal {
 

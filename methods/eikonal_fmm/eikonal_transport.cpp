@@ -7,8 +7,8 @@
 
 #include <tbb/parallel_for.h>
 
-#include "baseline.hpp"
-#include "scene.hpp"
+#include <caustics/frame/baseline.hpp>
+#include <caustics/scene/scene.hpp>
 #include "eikonal_solver.hpp"
 
 namespace caustics::eikonal {

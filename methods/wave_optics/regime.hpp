@@ -22,7 +22,7 @@
 
 #include <glm/glm.hpp>
 
-#include "heightfield.hpp"
+#include <caustics/scene/heightfield/heightfield.hpp>
 
 namespace caustics::wave_optics {
 

@@ -9,7 +9,7 @@
 
 #include <glm/glm.hpp>
 
-#include "heightfield.hpp"
+#include <caustics/scene/heightfield/heightfield.hpp>
 #include "wave_propagator.hpp"
 
 namespace caustics::wave_optics {

@@ -17,12 +17,12 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-#include "errors.hpp"
-#include "fft.hpp"
+#include <caustics/util/errors.hpp>
+#include <caustics/blocks/fft/fft.hpp>
 #include "refracted_screen.hpp"
 #include "regime.hpp"
-#include "registry.hpp"
-#include "timing.hpp"
+#include <caustics/api/registry.hpp>
+#include <caustics/util/timing.hpp>
 #include "wave_field_table.hpp"
 #include "wave_math.hpp"
 #include "wave_propagator.hpp"

@@ -31,7 +31,7 @@
 
 #include <glm/glm.hpp>
 
-#include "fft.hpp"
+#include <caustics/blocks/fft/fft.hpp>
 
 namespace caustics::wave_optics {
 

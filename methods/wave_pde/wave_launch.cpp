@@ -7,7 +7,7 @@
 
 #include <tbb/parallel_for.h>
 
-#include "baseline.hpp"
+#include <caustics/frame/baseline.hpp>
 
 namespace caustics::wave {
 

@@ -28,8 +28,8 @@
 
 #include <glm/glm.hpp>
 
-#include "heightfield.hpp"
-#include "volume_grid.hpp"
+#include <caustics/scene/heightfield/heightfield.hpp>
+#include <caustics/blocks/volume/volume_grid.hpp>
 #include "wave_solver.hpp"
 
 namespace caustics::wave {

@@ -19,13 +19,13 @@
 
 #include <tbb/parallel_for.h>
 
-#include "errors.hpp"
-#include "frame.hpp"
-#include "registry.hpp"
-#include "timing.hpp"
-#include "volume_grid.hpp"
-#include "volume_lookup.hpp"
-#include "volume_texture_method.hpp"
+#include <caustics/util/errors.hpp>
+#include <caustics/frame/frame.hpp>
+#include <caustics/api/registry.hpp>
+#include <caustics/util/timing.hpp>
+#include <caustics/blocks/volume/volume_grid.hpp>
+#include <caustics/blocks/volume/volume_lookup.hpp>
+#include <caustics/blocks/volume/volume_texture_method.hpp>
 #include "wave_launch.hpp"
 #include "wave_solver.hpp"
 

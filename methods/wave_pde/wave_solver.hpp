@@ -18,7 +18,7 @@
 #include <optional>
 #include <vector>
 
-#include "volume_grid.hpp"
+#include <caustics/blocks/volume/volume_grid.hpp>
 
 namespace caustics::wave {
 

@@ -17,12 +17,12 @@
 #include <fstream>
 #include <string>
 
-#include "camera.hpp"
-#include "errors.hpp"
-#include "frame.hpp"
-#include "ray_tracer.hpp"
-#include "receiver_chart.hpp"
-#include "scene.hpp"
+#include <caustics/frame/camera.hpp>
+#include <caustics/util/errors.hpp>
+#include <caustics/frame/frame.hpp>
+#include <caustics/frame/ray_tracer.hpp>
+#include <caustics/frame/receiver_chart.hpp>
+#include <caustics/scene/scene.hpp>
 
 namespace fs = std::filesystem;
 

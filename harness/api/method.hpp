@@ -1,0 +1,124 @@
+#pragma once
+// The plugin interface every caustics method implements (DESIGN.md section 4).
+//
+// Life cycle, as the harness drives it (DESIGN.md section 6):
+//   auto m = info.create(params);           // parameters already validated against info.params
+//   m->capabilities(scene)                  // supported, or a human-readable reason
+//   m->prepare(scene)                       // once per scene: timed, reported as prepare_ms
+//   per frame: m->update(frame)             // dynamic-geometry work: timed, update_ms
+//              m->render(frame, request)    // timed; warm-up then repeats
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <caustics/frame/camera.hpp>
+#include <caustics/frame/frame.hpp>
+#include <caustics/util/image.hpp>
+#include <caustics/api/params.hpp>
+#include <caustics/frame/receiver_chart.hpp>
+
+namespace caustics {
+
+struct Capability {
+    bool supported = true;
+    std::string reason;   // why not, when unsupported
+    static Capability yes() { return {}; }
+    static Capability no(std::string why) { return {false, std::move(why)}; }
+};
+
+// Health counters are data, not logs. Conventional names (use them where they apply):
+//   nonfinite        values that came out NaN/Inf (the harness also counts them in the output)
+//   lost_samples     estimator lookups that fell off the receiver, refracted rays that missed it
+//   not_converged    iterative estimates that did not converge
+//   clamped          steps or values clamped to stay finite
+//   not_covered      requested receiver points the method cannot shade (e.g. walls)
+struct Health {
+    std::map<std::string, std::int64_t> counters;
+    void add(const std::string& name, std::int64_t n = 1) { counters[name] += n; }
+    std::int64_t get(const std::string& name) const {
+        auto it = counters.find(name);
+        return it == counters.end() ? 0 : it->second;
+    }
+};
+
+// A periodic caustic texture (Stam, "Periodic Caustic Textures"; `caustics synth`): the caustic
+// irradiance on a horizontal plane `depth` metres below the water surface's base level, over exactly one
+// spatial period of the water height field (its rectangle), so that the texture tiles the plane.
+// Texel (i, j) is centred at world x = x0 + (i + 1/2) Lx / width, y = y0 + (j + 1/2) Ly / height, where
+// (x0, y0) is the rectangle's corner of least x and y and Lx x Ly its size (row 0 at the least y).
+// Light leaving the tile on one side re-enters on the other (toroidal accumulation).
+struct TextureRequest {
+    int width = 512;
+    int height = 512;
+    double depth = 1.0;   // [m] below the water's base height
+};
+
+// The accuracy a method claims on one frame of a scene at its current parameters. The conformance suite
+// (tests/test_conformance.cpp) holds every registered method to it on analytic cases: inside the claimed
+// regime, the receiver error against the exact truth (nrmse; after the least-squares scale fit where the
+// output is not radiometric) is at most `error_vs_baseline` times the error of drawing no caustic (the
+// flat interface's irradiance, harness/baseline.hpp). Outside it (`inside` false), `reason` names the
+// bound the frame passes, with the numbers (e.g. "the floor lies 1.2 m down, past the first focus at
+// 0.64 m"): the method still renders, its error is still measured and reported, but nothing is claimed.
+// A case a method cannot render at all is refused by capabilities() instead.
+struct AccuracyClaim {
+    bool inside = true;
+    double error_vs_baseline = 0.5;
+    std::string reason;
+    static AccuracyClaim within(double factor) { return {true, factor, {}}; }
+    static AccuracyClaim outside(std::string why) { return {false, 0.0, std::move(why)}; }
+};
+
+struct RenderRequest {
+    const ReceiverChart* receiver = nullptr;     // fill CausticOutput::receiver when non-null
+    const CameraGBuffer* camera = nullptr;       // fill CausticOutput::camera when non-null
+    // Fill CausticOutput::texture (and texture_rgb with dispersion) when non-null. Only methods whose
+    // texture_capability() says yes are asked; the others may ignore it.
+    const TextureRequest* texture = nullptr;
+};
+
+struct CausticOutput {
+    Image receiver;       // chart width x height, 1 channel, E_c [W/m^2] (relative if not radiometric)
+    Image receiver_rgb;   // optional colour version (dispersion), 3 channels
+    Image camera;         // gbuffer width x height, 1 channel; only covered pixels are read
+    Image texture;        // TextureRequest width x height, 1 channel, E_c [W/m^2] (see TextureRequest)
+    Image texture_rgb;    // optional colour version of the texture (dispersion), 3 channels
+    std::map<std::string, Image> debug;                  // optional: caustic map, overlays
+    std::vector<std::pair<std::string, double>> stages_ms;  // optional per-stage timings of render()
+    Health health;
+};
+
+class Method {
+public:
+    virtual ~Method() = default;
+    virtual Capability capabilities(const Scene& /*scene*/) const { return Capability::yes(); }
+    // Whether render() can fill a periodic texture (RenderRequest::texture) for this scene.
+    virtual Capability texture_capability(const Scene& /*scene*/) const {
+        return Capability::no("does not synthesise periodic textures");
+    }
+    virtual void prepare(const Scene& /*scene*/) {}
+    virtual void update(const FrameGeometry& /*frame*/) {}
+    virtual CausticOutput render(const FrameGeometry& frame, const RenderRequest& request) = 0;
+    // The accuracy this method claims on `frame` (asked after update(frame)). The default claims half
+    // the no-caustic baseline's error everywhere, which a method added later is held to until it
+    // states its own regime.
+    virtual AccuracyClaim accuracy_claim(const FrameGeometry& /*frame*/) const { return AccuracyClaim::within(0.5); }
+};
+
+struct MethodInfo {
+    std::string name;
+    std::string doc;
+    bool radiometric = true;        // false: output is relative; metrics add a least-squares fit
+    // Where a parameter switches the output between radiometric and relative values (an output mode):
+    // the answer for a parameter set. Unset: `radiometric` for every parameter set.
+    std::function<bool(const ParamSet&)> radiometric_for;
+    bool radiometric_at(const ParamSet& p) const { return radiometric_for ? radiometric_for(p) : radiometric; }
+    std::vector<ParamSpec> params;  // must contain `grid` and `iterations`
+    std::function<std::unique_ptr<Method>(const ParamSet&)> create;
+};
+
+}  // namespace caustics

@@ -1,0 +1,39 @@
+#pragma once
+// Pinhole camera rays and the camera G-buffer: for each pixel, the primary hit and whether it is a
+// diffuse receiver. Methods fill caustic irradiance for covered pixels (a deferred renderer's lookup
+// pass); building the G-buffer is harness work outside the methods' timed region.
+#include <cstdint>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include <caustics/frame/ray_tracer.hpp>
+
+namespace caustics {
+
+struct CameraModel {
+    glm::dvec3 position{0.0}, forward{0, 1, 0}, right{1, 0, 0}, up{0, 0, 1};
+    double tan_half_fov_y = 0.4;
+    int width = 1, height = 1;
+
+    explicit CameraModel(const Camera& c);
+    // Unit direction through pixel (x + dx, y + dy); row 0 is the top of the image.
+    glm::dvec3 ray_direction(double px, double py) const;
+    // Projects a world point to continuous pixel coordinates; false if behind the camera.
+    bool project(const glm::dvec3& p, double& px, double& py) const;
+    // Solid angle of pixel (ix, iy) seen from the camera centre.
+    double pixel_solid_angle(int ix, int iy) const;
+};
+
+struct CameraGBuffer {
+    int width = 0, height = 0;
+    std::vector<std::uint8_t> covered;     // 1 where the primary hit is a diffuse object
+    std::vector<int> object;               // primary-hit object index or -1
+    std::vector<glm::vec3> position;       // primary-hit position
+    std::vector<glm::vec3> normal;         // primary-hit shading normal (facing the camera)
+    std::size_t index(int x, int y) const { return static_cast<std::size_t>(y) * width + x; }
+};
+
+CameraGBuffer build_camera_gbuffer(const RayTracer& tracer, const Camera& camera);
+
+}  // namespace caustics

@@ -1,0 +1,48 @@
+#pragma once
+// Embree 3 scene of one frame (DESIGN.md section 10: rtcIntersect1 with an RTCIntersectContext).
+// Triangles for planes, boxes, meshes and height fields; Embree sphere points for analytic spheres.
+// Shading normals are interpolated (height fields: from the field's gradients) and face the same
+// side as the geometric normal's outward orientation.
+#include <cstdint>
+#include <memory>
+
+#include <glm/glm.hpp>
+
+#include <caustics/frame/frame.hpp>
+
+namespace caustics {
+
+struct Hit {
+    bool valid = false;
+    int object = -1;               // index into scene.objects / frame.objects
+    double t = 0.0;
+    glm::dvec3 position{0.0};
+    glm::dvec3 geometric_normal{0.0};  // unit, outward (height fields: up)
+    glm::dvec3 shading_normal{0.0};    // unit, outward, interpolated
+};
+
+class RayTracer {
+public:
+    explicit RayTracer(const FrameGeometry& frame);
+    ~RayTracer();
+    RayTracer(const RayTracer&) = delete;
+    RayTracer& operator=(const RayTracer&) = delete;
+
+    // Closest hit along origin + t dir, t in (tmin, tmax). Thread-safe.
+    Hit intersect(const glm::dvec3& origin, const glm::dvec3& dir, double tmin = 1e-6,
+                  double tmax = 1e30) const;
+    // True if anything lies on the open segment. Thread-safe.
+    bool occluded(const glm::dvec3& origin, const glm::dvec3& dir, double tmin, double tmax) const;
+
+    const FrameGeometry& frame() const { return *frame_; }
+
+    // Raw Embree access for throughput measurements (bench/): the committed RTCScene.
+    void* embree_scene() const;
+
+private:
+    struct Impl;
+    const FrameGeometry* frame_;
+    std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace caustics

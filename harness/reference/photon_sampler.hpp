@@ -1,0 +1,57 @@
+#pragma once
+// The reference's sample values (DESIGN.md section 5, issue 11): for photon `index` of replica `replica`,
+// the value in [0, 1) of each sample dimension (0-1: emission position or direction, 2: dispersion,
+// 3 and up: the Fresnel choice of each specular event).
+//
+// Sobol (the default): randomized quasi-Monte Carlo. Dimensions are taken in pairs; each pair is the
+// two-dimensional Sobol' (0,2)-sequence (van der Corput and its companion, polynomial x + 1), Owen-
+// scrambled with the hash-based nested uniform scramble of Burley 2020 ("Practical Hash-based Owen
+// Scrambling", JCGT 9(4)), and each pair reads its own Owen-scrambled (shuffled) index so that pairs are
+// decorrelated ("padding"). A shuffle maps every aligned block of 2^k indices onto another aligned
+// block, which for the (0,2)-sequence is again a (0,k,2)-net, so every power-of-two prefix stays
+// stratified. Each replica draws its scramble seeds from (seed, replica): replicas are independent
+// randomizations, and the spread between them is the only valid standard error (the points within
+// one replica are dependent).
+// Independent: counter-based uniform random numbers keyed by (seed, replica, index, dimension).
+//
+// Both are pure functions of their arguments, so results do not depend on the thread count.
+#include <cstdint>
+#include <string>
+
+#include <caustics/util/hash.hpp>
+
+namespace caustics {
+
+enum class SamplerKind { Sobol, Independent };
+
+// "sobol" / "independent"; parse returns false for anything else.
+const char* sampler_name(SamplerKind kind);
+bool parse_sampler(const std::string& text, SamplerKind& kind);
+
+// Dimensions past this use independent random numbers in either sampler (deep Fresnel chains).
+constexpr int kQuasiDimensions = 16;
+
+class PhotonSampler {
+public:
+    PhotonSampler(SamplerKind kind, std::uint64_t seed, std::uint32_t replica, std::uint64_t index)
+        : kind_(kind), replica_seed_(mix64(seed * 0x9E3779B97F4A7C15ull + replica + 1)), index_(index) {}
+    // The value of dimension `dim` (each dimension may be read any number of times).
+    double get(int dim) const;
+
+private:
+    double random(int dim) const {
+        const std::uint64_t h = mix64(mix64(replica_seed_ + index_ * 0xD1B54A32D192ED03ull) + (dim + 1) * 0x9E3779B97F4A7C15ull);
+        return static_cast<double>(h >> 11) * 0x1.0p-53;
+    }
+    SamplerKind kind_;
+    std::uint64_t replica_seed_;
+    std::uint64_t index_;
+};
+
+// Owen scrambling of a 32-bit base-2 fraction (bit 31 is the first digit), seeded; a bijection that
+// keeps every aligned dyadic interval whole (nested uniform scramble).
+std::uint32_t owen_scramble(std::uint32_t x, std::uint32_t seed);
+// The second dimension of the Sobol' sequence (generator matrix of the polynomial x + 1), 32 digits.
+std::uint32_t sobol_dim1(std::uint32_t index);
+
+}  // namespace caustics

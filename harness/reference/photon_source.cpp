@@ -1,0 +1,115 @@
+#include <caustics/reference/photon_source.hpp>
+
+#include <algorithm>
+
+namespace caustics {
+namespace {
+
+// Interleaves the bits of two 8-bit integers (Morton / Z order).
+std::uint32_t morton2(std::uint32_t x, std::uint32_t y) {
+    auto spread = [](std::uint32_t v) {
+        v &= 0xFFu;
+        v = (v | (v << 4)) & 0x0F0Fu;
+        v = (v | (v << 2)) & 0x3333u;
+        v = (v | (v << 1)) & 0x5555u;
+        return v;
+    };
+    return spread(x) | (spread(y) << 1);
+}
+
+}  // namespace
+
+void orthonormal_basis(const glm::dvec3& n, glm::dvec3& a, glm::dvec3& b) {
+    const double sign = std::copysign(1.0, n.z);
+    const double s = -1.0 / (sign + n.z);
+    const double t = n.x * n.y * s;
+    a = {1.0 + sign * n.x * n.x * s, sign * t, -sign * n.x};
+    b = {t, sign + n.y * n.y * s, -n.y};
+}
+
+Emitter make_emitter(const Light& light, const FrameGeometry& frame) {
+    Emitter e;
+    e.type = light.type;
+    Bounds3 target = frame.specular_bounds.valid() ? frame.specular_bounds : frame.receiver().bounds;
+    if (!target.valid()) target = frame.scene_bounds;
+    const glm::dvec3 lo = target.lo, hi = target.hi;
+    const double size = std::max(1e-6, glm::length(hi - lo));
+    if (light.type == LightType::Directional) {
+        e.direction = glm::normalize(light.direction);
+        orthonormal_basis(e.direction, e.axis_a, e.axis_b);
+        double amin = 1e300, amax = -1e300, bmin = 1e300, bmax = -1e300;
+        for (int k = 0; k < 8; ++k) {
+            const glm::dvec3 c((k & 1) ? hi.x : lo.x, (k & 2) ? hi.y : lo.y, (k & 4) ? hi.z : lo.z);
+            amin = std::min(amin, glm::dot(c, e.axis_a));
+            amax = std::max(amax, glm::dot(c, e.axis_a));
+            bmin = std::min(bmin, glm::dot(c, e.axis_b));
+            bmax = std::max(bmax, glm::dot(c, e.axis_b));
+        }
+        // A small margin so that silhouettes are not clipped by round-off.
+        const double margin = 1e-4 * size;
+        amin -= margin, amax += margin, bmin -= margin, bmax += margin;
+        // Start behind every object of the scene along the light direction.
+        const Bounds3& all = frame.scene_bounds.valid() ? frame.scene_bounds : target;
+        double dmin = 1e300;
+        for (int k = 0; k < 8; ++k) {
+            const glm::dvec3 c((k & 1) ? all.hi.x : all.lo.x, (k & 2) ? all.hi.y : all.lo.y,
+                               (k & 4) ? all.hi.z : all.lo.z);
+            dmin = std::min(dmin, glm::dot(c, e.direction));
+        }
+        dmin -= 0.01 * size + 1e-3;
+        e.corner = dmin * e.direction + amin * e.axis_a + bmin * e.axis_b;
+        e.extent_a = amax - amin;
+        e.extent_b = bmax - bmin;
+        e.power = light.irradiance * e.extent_a * e.extent_b;
+    } else {
+        e.position = light.position;
+        const glm::dvec3 center = 0.5 * (lo + hi);
+        const double radius = 0.5 * glm::length(hi - lo) * (1.0 + 1e-4) + 1e-6;
+        const double dist = glm::length(center - light.position);
+        if (dist > radius) {
+            e.direction = (center - light.position) / dist;
+            const double sin_max = radius / dist;
+            e.cos_max = std::sqrt(std::max(0.0, 1.0 - sin_max * sin_max));
+        } else {
+            e.direction = {0.0, 0.0, -1.0};
+            e.cos_max = -1.0;
+        }
+        orthonormal_basis(e.direction, e.axis_a, e.axis_b);
+        e.power = light.intensity * 2.0 * std::numbers::pi * (1.0 - e.cos_max);
+    }
+    return e;
+}
+
+void photon_batch_order(std::uint64_t lights, std::uint64_t first, std::uint64_t last,
+                        const std::function<void(std::uint64_t, double&, double&)>& emission,
+                        std::vector<std::uint32_t>& order, std::vector<std::uint32_t>& scratch) {
+    const std::size_t n = static_cast<std::size_t>(last - first);
+    constexpr std::size_t kCells = 65536;
+    std::vector<std::uint32_t>& cell = scratch;
+    cell.resize(2 * n + kCells + 1);
+    std::uint32_t* key = cell.data();
+    std::uint32_t* tmp = key + n;
+    std::uint32_t* count = tmp + n;
+    std::fill(count, count + kCells + 1, 0u);
+    for (std::size_t i = 0; i < n; ++i) {
+        double u1, u2;
+        emission(first + i, u1, u2);
+        key[i] = morton2(static_cast<std::uint32_t>(u1 * 256.0), static_cast<std::uint32_t>(u2 * 256.0));
+        ++count[key[i] + 1];
+    }
+    for (std::size_t c = 1; c <= kCells; ++c) count[c] += count[c - 1];
+    order.resize(n);
+    std::uint32_t* by_cell = lights > 1 ? tmp : order.data();
+    for (std::size_t i = 0; i < n; ++i) by_cell[count[key[i]]++] = static_cast<std::uint32_t>(i);
+    if (lights > 1) {   // stable second pass by light (photon k belongs to light k mod L)
+        std::vector<std::uint32_t> light_start(lights + 1, 0u);
+        for (std::size_t i = 0; i < n; ++i) ++light_start[(first + i) % lights + 1];
+        for (std::size_t l = 1; l <= lights; ++l) light_start[l] += light_start[l - 1];
+        for (std::size_t j = 0; j < n; ++j) {
+            const std::uint32_t i = by_cell[j];
+            order[light_start[(first + i) % lights]++] = i;
+        }
+    }
+}
+
+}  // namespace caustics

@@ -1,0 +1,63 @@
+#pragma once
+// Where the reference's photons come from (DESIGN.md section 5): the emitters of directional and point
+// lights, and the order in which each batch of photons is traced (the sample values themselves come
+// from photon_sampler.hpp). Split from reference.cpp; everything here is deterministic.
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <numbers>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include <caustics/frame/frame.hpp>
+#include <caustics/util/hash.hpp>
+#include <caustics/scene/scene.hpp>
+
+namespace caustics {
+
+// Duff et al. 2017, "Building an Orthonormal Basis, Revisited": a and b complete the unit vector n.
+void orthonormal_basis(const glm::dvec3& n, glm::dvec3& a, glm::dvec3& b);
+
+// Where photons of one light start and how much flux each carries.
+struct Emitter {
+    LightType type = LightType::Directional;
+    glm::dvec3 direction{0, 0, -1}, axis_a{1, 0, 0}, axis_b{0, 1, 0};
+    glm::dvec3 corner{0.0};            // directional: rectangle origin
+    double extent_a = 0, extent_b = 0; // directional: rectangle sides
+    glm::dvec3 position{0.0};          // point light
+    double cos_max = -1.0;             // point light: cone half-angle cosine (-1 = full sphere)
+    double power = 0.0;                // total flux this light sends through the sampled domain [W]
+    double flux_per_photon = 0.0;
+
+    void sample(double u1, double u2, glm::dvec3& origin, glm::dvec3& dir) const {
+        if (type == LightType::Directional) {
+            origin = corner + (u1 * extent_a) * axis_a + (u2 * extent_b) * axis_b;
+            dir = direction;
+        } else {
+            const double cos_t = 1.0 - u1 * (1.0 - cos_max);
+            const double sin_t = std::sqrt(std::max(0.0, 1.0 - cos_t * cos_t));
+            const double phi = 2.0 * std::numbers::pi * u2;
+            origin = position;
+            dir = glm::normalize(cos_t * direction + sin_t * (std::cos(phi) * axis_a + std::sin(phi) * axis_b));
+        }
+    }
+};
+
+// The emitter of one light, aimed at the frame's specular objects (or its receiver, or the whole scene):
+// a directional light covers the bounds' projection with a margin; a point light the cone around them.
+Emitter make_emitter(const Light& light, const FrameGeometry& frame);
+
+// The order in which the photons [first, last) of one batch are traced: grouped by light and then along
+// a Z-order curve over a 256 x 256 grid of their two emission sample values (`emission(k, u1, u2)`), so
+// that consecutive photons start close together and take similar paths (coherent BVH traversal,
+// height-field and accumulator accesses). Every photon's sample values depend only on its index, and
+// deposits are integer sums, so the order changes nothing but the round-off of the batch's flux ledger;
+// it is a fixed function of the batch (stable counting sorts), so results stay independent of the
+// thread count. `lights` is the number of emitters (photon k belongs to light k mod lights). `order`
+// receives photon offsets k - first; `scratch` holds keys.
+void photon_batch_order(std::uint64_t lights, std::uint64_t first, std::uint64_t last,
+                        const std::function<void(std::uint64_t, double&, double&)>& emission,
+                        std::vector<std::uint32_t>& order, std::vector<std::uint32_t>& scratch);
+
+}  // namespace caustics

@@ -1,0 +1,75 @@
+#include <caustics/report/report_front.hpp>
+
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <filesystem>
+#include <vector>
+
+#include <caustics/util/errors.hpp>
+
+namespace caustics {
+namespace fs = std::filesystem;
+
+namespace {
+
+// Runs `argv` (argv[0] a path, or a name looked up on PATH) and waits for it; returns its exit code, or 1
+// if it could not start or ended on a signal. The child dies with this process (PR_SET_PDEATHSIG, checked
+// against the race of a parent that died before the prctl took effect), so a killed `caustics report`
+// leaves no script running that would write the report later. `quiet` sends its output to /dev/null.
+int run_tied_child(const std::vector<std::string>& argv, bool quiet) {
+    std::vector<char*> args;
+    for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+    args.push_back(nullptr);
+    const pid_t parent = getpid();
+    const pid_t pid = fork();
+    if (pid < 0) return 1;
+    if (pid == 0) {
+        if (prctl(PR_SET_PDEATHSIG, SIGKILL) != 0) _exit(127);
+        if (getppid() != parent) _exit(127);   // the parent died before the prctl took effect
+        if (quiet) {
+            const int null_fd = open("/dev/null", O_WRONLY);
+            if (null_fd >= 0) {
+                dup2(null_fd, STDOUT_FILENO);
+                dup2(null_fd, STDERR_FILENO);
+                close(null_fd);
+            }
+        }
+        execvp(args[0], args.data());
+        _exit(127);
+    }
+    int status = 0;
+    while (waitpid(pid, &status, 0) < 0)
+        if (errno != EINTR) return 1;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 1;
+}
+
+bool has_plotting_modules(const std::string& python) {
+    return run_tied_child({python, "-c", "import matplotlib, pandas, numpy, OpenImageIO"}, true) == 0;
+}
+
+}  // namespace
+
+std::string find_plotting_python() {
+    for (const char* candidate : {"/usr/bin/python3", "python3"})
+        if (has_plotting_modules(candidate)) return candidate;
+    return "";
+}
+
+int run_report(const std::string& dir) {
+    if (!fs::is_regular_file(fs::path(dir) / "results.csv"))
+        throw InputError(dir, "results.csv", "not a sweep folder (no results.csv); run `caustics sweep SPEC --out DIR` first");
+    const std::string python = find_plotting_python();
+    if (python.empty())
+        throw InputError("report", "python3",
+                         "no python3 with matplotlib, pandas, numpy and OpenImageIO; run scripts/setup.sh "
+                         "(Debian packages python3-matplotlib python3-pandas python3-numpy python3-openimageio)");
+    const fs::path script = fs::path(CAUSTICS_SOURCE_DIR) / "scripts" / "report" / "report.py";
+    return run_tied_child({python, script.string(), dir}, false);
+}
+
+}  // namespace caustics

@@ -1,0 +1,572 @@
+#include <caustics/sweep/sweep.hpp>
+
+#include <signal.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <fcntl.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include <caustics/reference/analytic_truth.hpp>
+#include <caustics/util/errors.hpp>
+#include <caustics/util/hash.hpp>
+#include <caustics/util/image_io.hpp>
+#include <caustics/api/registry.hpp>
+#include <caustics/run/render_run.hpp>
+#include <caustics/run/run_context.hpp>
+
+namespace caustics {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+struct ChildResult {
+    int exit_code = -1;
+    int signal = 0;
+    bool timed_out = false;
+};
+
+std::string self_executable() {
+    std::error_code ec;
+    fs::path p = fs::read_symlink("/proc/self/exe", ec);
+    return ec ? std::string("caustics") : p.string();
+}
+
+// Runs argv with stdout and stderr appended to log_path. The child is killed if this process dies
+// (so an interrupted sweep leaves no run writing behind its back) or when it outlives timeout_s.
+ChildResult run_child(const std::vector<std::string>& argv, const std::string& log_path, double timeout_s) {
+    std::vector<char*> args;
+    for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+    args.push_back(nullptr);
+    const pid_t parent = getpid();
+    const pid_t pid = fork();
+    if (pid < 0) throw std::runtime_error("sweep: fork failed");
+    if (pid == 0) {
+        if (prctl(PR_SET_PDEATHSIG, SIGKILL) != 0) _exit(127);
+        if (getppid() != parent) _exit(127);   // the parent died before prctl took effect
+        const int fd = open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        if (fd >= 0) {
+            dup2(fd, STDOUT_FILENO);
+            dup2(fd, STDERR_FILENO);
+            close(fd);
+        }
+        execv(args[0], args.data());
+        _exit(127);
+    }
+    ChildResult result;
+    const auto start = std::chrono::steady_clock::now();
+    int status = 0;
+    while (true) {
+        const pid_t r = waitpid(pid, &status, timeout_s > 0 ? WNOHANG : 0);
+        if (r == pid) break;
+        if (r < 0) throw std::runtime_error("sweep: waitpid failed");
+        const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        if (elapsed > timeout_s) {
+            kill(pid, SIGKILL);
+            waitpid(pid, &status, 0);
+            result.timed_out = true;
+            break;
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    if (WIFEXITED(status)) result.exit_code = WEXITSTATUS(status);
+    if (WIFSIGNALED(status)) result.signal = WTERMSIG(status);
+    return result;
+}
+
+std::string last_line_of(const std::string& path) {
+    std::ifstream in(path);
+    std::string line, last;
+    while (std::getline(in, line))
+        if (!line.empty()) last = line;
+    const std::string prefix = "caustics: error: ";
+    if (last.rfind(prefix, 0) == 0) last = last.substr(prefix.size());
+    return last;
+}
+
+// The complete lines of results.jsonl. A line cut off by a kill (no newline, or not JSON) is dropped:
+// its run is redone.
+std::vector<std::string> read_result_lines(const fs::path& path) {
+    std::vector<std::string> lines;
+    std::ifstream in(path, std::ios::binary);
+    if (!in) return lines;
+    std::stringstream buffer;
+    buffer << in.rdbuf();
+    const std::string text = buffer.str();
+    std::size_t begin = 0;
+    while (true) {
+        const std::size_t end = text.find('\n', begin);
+        if (end == std::string::npos) break;
+        std::string line = text.substr(begin, end - begin);
+        begin = end + 1;
+        const json row = json::parse(line, nullptr, false);
+        if (!row.is_discarded() && row.is_object() && row.contains("run_id")) lines.push_back(std::move(line));
+    }
+    return lines;
+}
+
+std::string joined(const std::vector<std::string>& lines) {
+    std::string text;
+    for (const auto& l : lines) text += l + "\n";
+    return text;
+}
+
+std::string csv_field(const json& v) {
+    std::string s;
+    if (v.is_null()) return "";
+    if (v.is_string()) s = v.get<std::string>();
+    else if (v.is_boolean()) s = v.get<bool>() ? "true" : "false";
+    else if (v.is_number()) s = v.dump();
+    else s = v.dump();
+    if (s.find_first_of(",\"\n\r") == std::string::npos) return s;
+    std::string q = "\"";
+    for (char c : s) q += (c == '"') ? std::string("\"\"") : std::string(1, c);
+    return q + "\"";
+}
+
+const json& at_path(const json& j, std::initializer_list<const char*> keys) {
+    static const json null_value;
+    const json* cur = &j;
+    for (const char* k : keys) {
+        if (!cur->is_object() || !cur->contains(k)) return null_value;
+        cur = &(*cur)[k];
+    }
+    return *cur;
+}
+
+// The row of a run that produced no metrics.json (bad parameters, crash, timeout).
+json bare_row(const PlannedRun& run, const std::string& status, const std::string& message) {
+    json params(json::object());
+    for (const auto& [k, v] : run.params) params[k] = v;
+    return {{"method", run.method}, {"scene", run.scene_name}, {"frame", run.frame}, {"params", params},
+            {"status", status}, {"message", message}};
+}
+
+// Shortest text that reads back as the same double (children parse it).
+std::string number_text(double v) {
+    char buf[40];
+    std::snprintf(buf, sizeof buf, "%.17g", v);
+    return buf;
+}
+
+// ----- The plan a sweep folder records (manifest.json "plan", "plan_hash") -----
+
+constexpr int kPlanVersion = 1;
+
+// An axis value's canonical text as JSON (a number or boolean where it reads as one), for readable plans.
+json value_json(const std::string& canonical) {
+    const json v = json::parse(canonical, nullptr, false);
+    return v.is_discarded() || !v.is_primitive() || v.is_null() ? json(canonical) : v;
+}
+
+// The scene file's bytes and every asset's bytes: an edited scene is another plan.
+std::string scene_content_hash(const Scene& scene) {
+    Hash128 h;
+    hash_scene_contents(h, scene);
+    return h.hex();
+}
+
+// Everything that decides what a run measures and against what: per scene (by name) its file contents,
+// frames, reference noise target and truth; the reference settings; the timing protocol (with the
+// per-run time limit and threads in effect); every method's axis values; and the runs themselves (count
+// and a hash of every run's id, scene, frame, method and parameters). Not the description, the report
+// settings, the spec's file name or folder, the cache folder: those may change on --resume.
+json sweep_plan(const SweepSpec& spec, const std::vector<PlannedRun>& runs, const std::vector<std::string>& scene_hashes,
+                int threads, double timeout_s) {
+    json plan;
+    plan["version"] = kPlanVersion;
+    json scenes = json::object();
+    for (std::size_t i = 0; i < spec.scenes.size(); ++i) {
+        const SweepScene& scene = spec.scenes[i];
+        scenes[fs::path(scene.path).stem().string()] = {
+            {"file_hash", scene_hashes[i]},
+            {"frames", scene.frames},
+            {"noise_target", scene.noise_target >= 0.0 ? scene.noise_target : spec.noise_target},
+            {"truth", scene.truth.empty() ? spec.truth : scene.truth}};
+    }
+    plan["scenes"] = scenes;
+    plan["reference"] = {{"photons", spec.photons}, {"seed", spec.seed}, {"photon_cap", spec.photon_cap},
+                         {"sampler", spec.sampler}, {"replicas", spec.replicas}};
+    plan["timing"] = {{"warmup", spec.warmup}, {"repeats", spec.repeats}, {"precision", spec.timing_precision},
+                      {"max_time_s", spec.timing_max_s}, {"timeout_s", timeout_s}, {"threads", threads}};
+    json methods = json::object();
+    for (const auto& m : spec.methods) {
+        json axes = json::object();
+        for (const auto& a : m.axes) {
+            json values = json::array();
+            for (const auto& v : a.values) values.push_back(value_json(v));
+            axes[a.name] = values;
+        }
+        methods[m.method] = axes;
+    }
+    plan["methods"] = methods;
+    Hash128 h;
+    for (const PlannedRun& run : runs) {
+        h.text(run.id);
+        h.text(run.scene_name);
+        h.u64(static_cast<std::uint64_t>(run.frame));
+        h.text(run.method);
+        h.u64(run.params.size());
+        for (const auto& [k, v] : run.params) {
+            h.text(k);
+            h.text(v);
+        }
+        h.f64(run.noise_target);
+        h.text(run.truth);
+    }
+    plan["runs"] = {{"count", runs.size()}, {"hash", h.hex()}};
+    return plan;
+}
+
+std::string plan_hash(const json& plan) {
+    Hash128 h;
+    h.text(plan.dump());
+    return h.hex();
+}
+
+std::string brief(const json& v) {
+    std::string s = v.dump();
+    return s.size() > 80 ? s.substr(0, 77) + "..." : s;
+}
+
+// "key.path: <in the folder> in the folder, <now> now" for every leaf that differs.
+void differences(const json& was, const json& now, const std::string& path, std::vector<std::string>& out) {
+    if (was.is_object() && now.is_object()) {
+        std::set<std::string> keys;
+        for (const auto& [k, v] : was.items()) keys.insert(k);
+        for (const auto& [k, v] : now.items()) keys.insert(k);
+        for (const auto& k : keys) {
+            const std::string sub = path.empty() ? k : path + "." + k;
+            if (!was.contains(k)) out.push_back(sub + ": absent in the folder, " + brief(now[k]) + " now");
+            else if (!now.contains(k)) out.push_back(sub + ": " + brief(was[k]) + " in the folder, absent now");
+            else differences(was[k], now[k], sub, out);
+        }
+    } else if (was != now) {
+        out.push_back((path.empty() ? std::string("plan") : path) + ": " + brief(was) + " in the folder, " + brief(now) + " now");
+    }
+}
+
+std::string listed(const std::vector<std::string>& items) {
+    std::string text;
+    for (std::size_t i = 0; i < items.size() && i < 3; ++i) text += (i ? "; " : "") + items[i];
+    if (items.size() > 3) text += "; and " + std::to_string(items.size() - 3) + " more";
+    return text;
+}
+
+// For --resume: the folder's manifest when the sweep in it was started with this plan (an empty object
+// when the folder holds no sweep yet); throws InputError naming what differs otherwise, or when the folder
+// holds results whose plan cannot be told. Reads only.
+json check_resume(const fs::path& dir, const json& plan, const SweepSpec& spec) {
+    const fs::path manifest_path = dir / "manifest.json";
+    std::error_code ec;
+    const auto refuse = [&](const std::string& why) {
+        return InputError("--resume", dir.string(), why + "; resume with the spec (and --axis, --threads, --timeout) "
+                                                          "it was started with, or choose another --out folder");
+    };
+    if (!fs::exists(manifest_path, ec)) {
+        if (fs::exists(dir / "results.jsonl", ec))
+            throw refuse("the folder holds results.jsonl but no manifest.json, so the plan its rows were measured "
+                         "with cannot be checked");
+        return json::object();
+    }
+    std::ifstream in(manifest_path, std::ios::binary);
+    const json manifest = json::parse(in, nullptr, false);
+    if (manifest.is_discarded() || !manifest.is_object())
+        throw refuse("manifest.json is not readable JSON, so the plan the sweep was started with cannot be checked");
+    std::vector<std::string> diff;
+    if (manifest.contains("plan")) {
+        json was = manifest["plan"], current = plan;
+        const json was_runs = was.value("runs", json()), now_runs = current.value("runs", json());
+        was.erase("runs");
+        current.erase("runs");
+        differences(was, current, "", diff);
+        if (diff.empty()) differences(was_runs, now_runs, "runs", diff);   // derived: named only alone
+    } else if (manifest.contains("spec")) {
+        // A folder from before plans were recorded: the spec as run must be the same.
+        json was = manifest["spec"], current = spec.as_run;
+        for (const char* free : {"description", "report"}) {
+            if (was.is_object()) was.erase(free);
+            if (current.is_object()) current.erase(free);
+        }
+        differences(was, current, "spec", diff);
+    } else {
+        throw refuse("manifest.json records neither the plan nor the spec the sweep was started with");
+    }
+    if (!diff.empty()) throw refuse("the sweep in this folder was started with another plan: " + listed(diff));
+    return manifest;
+}
+
+// The reference the run's children will ask for, so the parent's computation fills their cache entry.
+void apply_reference_options(const SweepSpec& spec, const PlannedRun& run, RenderOptions& ro) {
+    ro.photons = spec.photons;
+    ro.seed = spec.seed;
+    ro.noise_target = run.noise_target;
+    ro.photon_cap = spec.photon_cap;
+    parse_sampler(spec.sampler, ro.sampler);
+    ro.replicas = spec.replicas;
+}
+
+}  // namespace
+
+std::string results_csv(const SweepSpec& spec, const std::vector<json>& rows) {
+    std::set<std::string> param_names;
+    for (const auto& m : spec.methods)
+        if (const MethodInfo* info = find_method(m.method))
+            for (const auto& p : info->params) param_names.insert(p.name);
+    struct Column {
+        std::string name;
+        std::function<json(const json&)> get;
+    };
+    std::vector<Column> columns;
+    auto add = [&](std::string name, std::initializer_list<const char*> path) {
+        std::vector<const char*> keys(path);
+        columns.push_back({std::move(name), [keys](const json& r) {
+                               const json* cur = &r;
+                               for (const char* k : keys) {
+                                   if (!cur->is_object() || !cur->contains(k)) return json();
+                                   cur = &(*cur)[k];
+                               }
+                               return *cur;
+                           }});
+    };
+    add("run_id", {"run_id"});
+    add("scene", {"scene"});
+    add("frame", {"frame"});
+    add("method", {"method"});
+    add("status", {"status"});
+    add("radiometric", {"radiometric"});
+    add("grid", {"params", "grid"});
+    add("iterations", {"params", "iterations"});
+    add("time_ms_median", {"time_ms", "median"});
+    add("time_ms_min", {"time_ms", "min"});
+    add("time_ms_p90", {"time_ms", "p90"});
+    add("time_ms_stdev", {"time_ms", "stdev"});
+    add("time_ms_iqr", {"time_ms", "iqr"});
+    add("time_ms_ci_rel", {"time_ms", "ci_rel"});
+    add("frame_time", {"frame_time"});
+    add("frame_ms_median", {"frame_ms", "median"});
+    add("frame_ms_ci_rel", {"frame_ms", "ci_rel"});
+    add("fps", {"fps"});
+    add("render_fps", {"render_fps"});
+    add("noisy_timing", {"noisy_timing"});
+    add("prepare_ms", {"prepare_ms"});
+    add("update_ms", {"update_ms"});
+    for (const char* metric : {"nrmse", "relmse", "psnr", "ssim", "nrmse_fit", "fit_scale", "nrmse_net", "nrmse_net_lo",
+                               "nrmse_net_hi", "relmse_net", "nrmse_fit_net", "nrmse_fit_net_lo", "nrmse_fit_net_hi",
+                               "consistent_with_reference"}) {
+        add(metric, {"error", "receiver", metric});
+        add(std::string("camera_") + metric, {"error", "camera", metric});
+    }
+    // The error the report ranks, of the kind the method is judged by (fitted when not radiometric).
+    columns.push_back({"error_kind", [](const json& r) {
+                           if (!r.contains("radiometric") || !r["radiometric"].is_boolean()) return json();
+                           return json(r["radiometric"].get<bool>() ? "nrmse" : "nrmse_fit");
+                       }});
+    for (const char* suffix : {"", "_lo", "_hi"}) {
+        const std::string s = suffix;
+        columns.push_back({"error_net" + s, [s](const json& r) {
+                               const json& radiometric = at_path(r, {"radiometric"});
+                               if (!radiometric.is_boolean()) return json();
+                               const std::string key = (radiometric.get<bool>() ? "nrmse_net" : "nrmse_fit_net") + s;
+                               return at_path(r, {"error", "receiver", key.c_str()});
+                           }});
+    }
+    add("baseline_error", {"baseline", "error"});
+    add("baseline_kind", {"baseline", "kind"});
+    add("error_vs_baseline", {"error", "receiver", "error_vs_baseline"});
+    add("no_better_than_flat", {"no_better_than_flat"});
+    add("claim_inside", {"claim", "inside"});
+    add("claim_error_vs_baseline", {"claim", "error_vs_baseline"});
+    add("claim_met", {"claim", "met"});
+    add("claim_reason", {"claim", "reason"});
+    add("truth", {"truth", "kind"});
+    columns.push_back({"noise_nrmse", [](const json& r) {
+                           // The noise of the truth the errors are measured against (0 for a closed form).
+                           const json& t = at_path(r, {"truth", "noise_nrmse"});
+                           return t.is_null() ? at_path(r, {"reference", "noise_nrmse"}) : t;
+                       }});
+    add("reference_noise_nrmse", {"reference", "noise_nrmse"});
+    add("noise_target", {"reference", "noise_target"});
+    add("noise_target_met", {"reference", "noise_target_met"});
+    add("below_reference_noise", {"below_reference_noise"});
+    add("reference_photons", {"reference", "photons"});
+    add("threads", {"threads"});
+    columns.push_back({"health", [](const json& r) {
+                           std::string s;
+                           if (r.contains("health") && r["health"].is_object())
+                               for (const auto& [k, v] : r["health"].items())
+                                   s += (s.empty() ? "" : ";") + k + "=" + v.dump();
+                           return json(s);
+                       }});
+    for (const auto& name : param_names) {
+        columns.push_back({"param." + name, [name](const json& r) {
+                               const json& v = at_path(r, {"params"});
+                               return v.is_object() && v.contains(name) ? v[name] : json();
+                           }});
+    }
+    add("message", {"message"});
+
+    std::string out;
+    for (std::size_t c = 0; c < columns.size(); ++c) out.append(c ? "," : "").append(columns[c].name);
+    out += "\n";
+    for (const auto& row : rows) {
+        for (std::size_t c = 0; c < columns.size(); ++c) out.append(c ? "," : "").append(csv_field(columns[c].get(row)));
+        out += "\n";
+    }
+    return out;
+}
+
+SweepSummary run_sweep(const SweepOptions& options) {
+    const SweepSpec spec = load_sweep_spec(options.spec_path, options.axis_overrides);   // at most kMaxSweepRuns
+    const std::uint64_t planned = count_runs(spec);
+    if (planned > kMaxRunsWithoutConfirmation && !options.yes)
+        throw InputError(options.spec_path, "methods",
+                         "the sweep has " + std::to_string(planned) + " runs (more than " +
+                             std::to_string(kMaxRunsWithoutConfirmation) + "); pass --yes to run it anyway");
+    const std::vector<PlannedRun> runs = plan_runs(spec);
+    if (options.out_dir.empty()) throw InputError("--out", "", "a sweep needs an output folder");
+    const fs::path dir(options.out_dir);
+    const fs::path jsonl = dir / "results.jsonl";
+    std::error_code ec;
+    if (!options.resume && fs::exists(jsonl, ec))
+        throw InputError("--out", options.out_dir, "already holds a sweep; pass --resume to continue it or choose another folder");
+    // Every scene must load before anything runs: a malformed scene is bad input of the whole sweep.
+    std::vector<std::string> scene_hashes;
+    for (const auto& scene : spec.scenes) scene_hashes.push_back(scene_content_hash(load_scene(scene.path)));
+    const double timeout = options.timeout_s > 0.0 ? options.timeout_s : spec.timeout_s;
+    const json plan = sweep_plan(spec, runs, scene_hashes, options.threads, timeout);
+
+    // A resumed sweep must continue the plan it was started with: checked before any file is written.
+    json manifest = options.resume ? check_resume(dir, plan, spec) : json::object();
+    if (manifest.empty()) {
+        manifest = run_context();
+        manifest["spec_path"] = options.spec_path;
+        manifest["spec"] = spec.as_run;
+        manifest["runs_planned"] = runs.size();
+    } else {
+        json resumed = run_context();
+        resumed["spec_path"] = options.spec_path;
+        manifest["resumed"].push_back(resumed);
+    }
+    manifest["plan"] = plan;
+    manifest["plan_hash"] = plan_hash(plan);
+    fs::create_directories(dir / "runs");
+    write_text_atomic((dir / "manifest.json").string(), manifest.dump(2) + "\n");
+
+    std::vector<std::string> lines = read_result_lines(jsonl);
+    std::set<std::string> finished;
+    std::vector<json> rows;
+    for (const auto& l : lines) {
+        rows.push_back(json::parse(l));
+        finished.insert(rows.back()["run_id"].get<std::string>());
+    }
+    // Rewrite once so that a cut-off trailing line is gone before new lines follow it.
+    write_text_atomic(jsonl.string(), joined(lines));
+    write_text_atomic((dir / "results.csv").string(), results_csv(spec, rows));
+
+    SweepSummary summary;
+    summary.total = runs.size();
+    summary.done_before = finished.size();
+    const std::string program = options.render_program.empty() ? self_executable() : options.render_program;
+    const std::string cache = options.cache_dir.empty() ? default_cache_dir() : options.cache_dir;
+    const auto start = std::chrono::steady_clock::now();
+    std::set<std::string> references_done;
+
+    for (const PlannedRun& run : runs) {
+        if (finished.count(run.id)) continue;
+        const fs::path run_dir = dir / "runs" / run.id;
+        fs::remove_all(run_dir, ec);   // a run cut off earlier is redone from scratch
+        fs::create_directories(run_dir);
+
+        // The shared reference of this scene and frame, computed here once, read by the children from
+        // the cache. A frame outside the scene's animation is the run's problem (skipped), not the sweep's.
+        const std::string ref_key = run.scene_name + "-f" + std::to_string(run.frame);
+        if (!references_done.count(ref_key)) {
+            references_done.insert(ref_key);
+            try {
+                RenderOptions ro;
+                apply_reference_options(spec, run, ro);
+                ro.threads = options.threads;
+                ro.cache_dir = cache;
+                ro.progress = options.progress;
+                SceneFrame sf(load_scene(run.scene_path), run.frame);
+                const ReferenceResult ref = reference_for(sf, ro);
+                const fs::path ref_dir = dir / "references" / ref_key;
+                write_reference_outputs(ref_dir.string(), sf.scene(), run.frame, ref);
+                // The closed form the runs' receiver errors are measured against, for the report's images.
+                if (run.truth != "reference") {
+                    const AnalyticTruth truth = analytic_truth(sf.geometry(), sf.chart());
+                    if (truth.available) write_exr(truth.receiver, (ref_dir / "truth_receiver.exr").string());
+                }
+            } catch (const InputError&) {
+                // Recorded per run below, from the child's message.
+            }
+        }
+
+        std::vector<std::string> argv = {program, "render", run.scene_path, "--method", run.method,
+                                         "--frame", std::to_string(run.frame), "--out", run_dir.string(),
+                                         "--photons", std::to_string(spec.photons), "--seed", std::to_string(spec.seed),
+                                         "--warmup", std::to_string(spec.warmup), "--repeats", std::to_string(spec.repeats),
+                                         "--timing-precision", number_text(spec.timing_precision),
+                                         "--max-time", number_text(spec.timing_max_s), "--truth", run.truth,
+                                         "--sampler", spec.sampler, "--replicas", std::to_string(spec.replicas),
+                                         "--noise-target", number_text(run.noise_target),
+                                         "--photon-cap", std::to_string(spec.photon_cap),
+                                         "--threads", std::to_string(options.threads), "--cache", cache};
+        for (const auto& [k, v] : run.params) {
+            argv.push_back("--set");
+            argv.push_back(k + "=" + v);
+        }
+        const std::string log = (run_dir / "log.txt").string();
+        if (options.progress) {
+            const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            const std::size_t done = summary.ran, left = runs.size() - finished.size() - summary.ran;
+            std::string eta = done ? std::to_string(static_cast<long>(elapsed / done * left)) + " s" : "?";
+            std::fprintf(stderr, "sweep [%zu/%zu] %s  (%.2f runs/s, ETA %s)\n", finished.size() + summary.ran + 1,
+                         runs.size(), run.id.c_str(), done ? done / elapsed : 0.0, eta.c_str());
+        }
+        const ChildResult child = run_child(argv, log, timeout);
+
+        json row;
+        const fs::path metrics_path = run_dir / "metrics.json";
+        if (child.exit_code == 0 && fs::exists(metrics_path)) {
+            std::ifstream in(metrics_path);
+            row = json::parse(in, nullptr, false);
+            if (row.is_discarded()) row = bare_row(run, "failed", "metrics.json unreadable");
+        } else if (child.timed_out) {
+            row = bare_row(run, "failed", "timed out after " + std::to_string(timeout) + " s");
+        } else if (child.signal) {
+            row = bare_row(run, "failed", std::string("crashed: ") + strsignal(child.signal) + " (" + last_line_of(log) + ")");
+        } else if (child.exit_code == 2) {
+            row = bare_row(run, "skipped", last_line_of(log));   // the method rejected the parameters
+        } else {
+            row = bare_row(run, "failed", "exit code " + std::to_string(child.exit_code) + ": " + last_line_of(log));
+        }
+        row["run_id"] = run.id;
+        row["scene"] = run.scene_name;
+        const std::string status = row.value("status", "failed");
+        summary.ok += status == "ok";
+        summary.skipped += status == "skipped";
+        summary.failed += status == "failed";
+        summary.unstable += status == "unstable";
+        ++summary.ran;
+
+        lines.push_back(row.dump());
+        rows.push_back(row);
+        write_text_atomic(jsonl.string(), joined(lines));
+        write_text_atomic((dir / "results.csv").string(), results_csv(spec, rows));
+    }
+    return summary;
+}
+
+}  // namespace caustics

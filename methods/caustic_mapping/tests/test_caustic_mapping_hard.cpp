@@ -1,0 +1,234 @@
+// caustic_mapping on the hard cases of issue 13, against the exact sine truth (harness/analytic_truth):
+// tilted light (the receivers' window must cover the specular objects), a caustic line focused across
+// (elliptical splats), ior = 1 (flat, no bad derivatives, nothing lost), Newton at convergence, past the
+// first focus (folds), and the accuracy claim's bound.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+
+#include <tbb/global_control.h>
+#include <map>
+#include <string>
+
+#include "../caustic_mapping.hpp"
+#include "../estimator.hpp"
+#include <caustics/reference/analytic_truth.hpp>
+#include "method_support.hpp"
+#include "sine_truth_support.hpp"
+
+using namespace caustics;
+using namespace caustics::caustic_mapping;
+using test_support::SineSetup;
+
+namespace {
+
+struct Result {
+    CausticOutput out;
+    Image truth;
+    double nrmse = 0.0, baseline = 0.0, flux_ratio = 0.0, std_over_mean = 0.0;
+    AccuracyClaim claim;
+};
+
+// Renders a sine case at 128 x 32 bins and compares it with the exact truth: nrmse = rms error / mean
+// truth (the flat baseline's: the truth's own rms deviation from its mean).
+Result run(const SineSetup& c, const std::map<std::string, std::string>& overrides) {
+    Result r;
+    const Scene scene = test_support::make_sine_scene(c);
+    r.out = test_support::render_method("caustic_mapping", scene, overrides, c.bins_x, c.bins_y);
+    const FrameGeometry frame = build_frame_geometry(scene, 0);
+    const ReceiverChart chart(frame, c.bins_x, c.bins_y);
+    const AnalyticTruth t = analytic_truth(frame, chart);
+    EXPECT_TRUE(t.available) << t.reason;
+    r.truth = t.receiver;
+    double se = 0, mean = 0, var = 0, s1 = 0, s2 = 0;
+    int lit = 0;
+    const double n = static_cast<double>(r.truth.pixels.size());
+    for (float v : r.truth.pixels) mean += v / n;
+    for (std::size_t i = 0; i < r.truth.pixels.size(); ++i) {
+        const double m = r.out.receiver.pixels[i], tr = r.truth.pixels[i];
+        se += (m - tr) * (m - tr) / n;
+        var += (tr - mean) * (tr - mean) / n;
+        if (tr > 0.0) s1 += m, s2 += m * m, ++lit;
+    }
+    r.nrmse = std::sqrt(se) / mean;
+    r.baseline = std::sqrt(var) / mean;
+    r.flux_ratio = test_support::receiver_flux(r.out.receiver, chart) / test_support::receiver_flux(r.truth, chart);
+    const double m1 = s1 / lit;
+    r.std_over_mean = std::sqrt(std::max(0.0, s2 / lit - m1 * m1)) / m1;
+    const MethodInfo& info = require_method("caustic_mapping");
+    r.claim = claim_for(frame, settings_from(ParamSet::resolve(info.name, info.params, overrides)));
+    return r;
+}
+
+SineSetup sine(double tilt, double floor_z, double absorption = 0.0, double ior = 1.33) {
+    SineSetup c;
+    c.tilt_deg = tilt;
+    c.floor_z = floor_z;
+    c.absorption = absorption;
+    c.ior = ior;
+    c = test_support::with_water_feeding_floor(c);
+    c.bins_x = 128;
+    c.bins_y = 32;
+    return c;
+}
+
+double column_mean(const Image& img, int i) {
+    double s = 0.0;
+    for (int j = 0; j < img.height; ++j) s += img.at(i, j) / img.height;
+    return s;
+}
+
+}  // namespace
+
+// Under light tilted 30 deg the estimator's first lookup (the light ray through the water vertex) lies
+// downstream of the receiver's edge for the light that lands near that edge. A window fitted to the
+// receiver alone (extend=32: the old rim) returns the null value there: the last columns went dark and
+// 6 % of the flux was lost. The window now covers the water too, extrapolated to its edges.
+TEST(CausticMappingHard, TiltedLightKeepsTheFluxAtTheDownstreamEdge) {
+    const SineSetup c = sine(30.0, -0.4);
+    const Result r = run(c, {});
+    EXPECT_NEAR(r.flux_ratio, 1.0, 0.01);
+    for (int i = c.bins_x - 4; i < c.bins_x; ++i)
+        EXPECT_NEAR(column_mean(r.out.receiver, i), column_mean(r.truth, i), 0.35 * column_mean(r.truth, i) + 0.05) << i;
+    EXPECT_EQ(r.out.health.get("lost_samples"), 0);
+    EXPECT_EQ(r.out.health.get("null_value"), 0);
+    // The paper's behaviour (no extrapolated rim: extend = 0) loses the light at the edge, and counts it.
+    const Result paper = run(c, {{"extend", "0"}});
+    EXPECT_LT(paper.flux_ratio, 0.97);
+    EXPECT_GT(paper.out.health.get("null_value"), 0);
+}
+
+// The caustic lines of sine_oblique are nearly focused (focus 0.44 m, floor 0.4 m): the landing lattice
+// is compressed across the lines and not along them. An isotropic footprint sized by the larger spacing
+// (splat=adaptive) spreads each line over a grid spacing; the elliptical one follows the lattice.
+TEST(CausticMappingHard, EllipticalSplatsKeepFocusedLinesSharp) {
+    const SineSetup c = sine(30.0, -0.4);
+    const Result elliptic = run(c, {});
+    const Result isotropic = run(c, {{"splat", "adaptive"}});
+    std::printf("sine_oblique grid 128: nrmse elliptic %.4f, adaptive %.4f, baseline %.4f\n", elliptic.nrmse,
+                isotropic.nrmse, elliptic.baseline);
+    EXPECT_LT(elliptic.nrmse, 0.03);
+    EXPECT_GT(isotropic.nrmse, 2.0 * elliptic.nrmse);
+    EXPECT_NEAR(elliptic.flux_ratio, 1.0, 0.01);
+}
+
+// Refining the grid refines the caustic map with it (map = 0: 6 x grid, at least 768): with the map fixed
+// at 768 the map's texels limit the focused lines of sine_oblique and grid 256 measured worse than grid
+// 128 on 256 bins (nrmse 0.060 against 0.044).
+TEST(CausticMappingHard, ErrorFallsWithTheGridOnFineBins) {
+    SineSetup c = sine(30.0, -0.4);
+    c.bins_x = 256;
+    c.bins_y = 16;
+    const Result r128 = run(c, {});
+    const Result r256 = run(c, {{"grid", "256"}});
+    std::printf("sine_oblique on 256 bins: nrmse grid 128 %.4f, grid 256 %.4f\n", r128.nrmse, r256.nrmse);
+    EXPECT_LT(r256.nrmse, 0.5 * r128.nrmse);
+}
+
+// ior = 1: the interface bends nothing and the truth is flat. Before: 1087 bad derivatives (Newton's
+// forward difference across the kink of |P - q| at convergence) and 3776 lost samples (the window).
+TEST(CausticMappingHard, IndexOneIsFlatWithNoBadDerivativesOrLostSamples) {
+    SineSetup c = sine(30.0, -0.4, 0.0, 1.0);
+    c.bins_y = 128;   // the conformance suite's square bins: the lattice's ripple shows in both directions
+    const Result r = run(c, {});
+    std::printf("ior 1: std/mean %.5f flux ratio %.5f\n", r.std_over_mean, r.flux_ratio);
+    EXPECT_LT(r.std_over_mean, 0.01);
+    EXPECT_NEAR(r.flux_ratio, 1.0, 0.01);
+    EXPECT_EQ(r.out.health.get("bad_derivative"), 0);
+    EXPECT_EQ(r.out.health.get("lost_samples"), 0);
+    EXPECT_EQ(r.out.health.get("nonfinite"), 0);
+    EXPECT_TRUE(r.claim.inside);   // judged by flatness and flux: the flat baseline's error is 0 here
+}
+
+// Newton on a curved surface seen from above: once an estimate is within eps of the surface, the
+// forward difference straddles it. On the paper's |P - q| that slope has the wrong sign whenever the
+// estimate is in front (a bad derivative on a converged ray); on the signed distance it is the true slope.
+TEST(CausticMappingHard, NewtonAtConvergenceHasNoBadDerivative) {
+    struct Surface {   // z = -0.4 + 0.02 sin(5 x) seen by a light looking down: fetch is exact
+        bool fetch(const glm::dvec3& p, glm::dvec3& q) const {
+            q = {p.x, p.y, -0.4 + 0.02 * std::sin(5.0 * p.x)};
+            return true;
+        }
+        double depth(const glm::dvec3& p) const { return -p.z; }
+    } tex;
+    EstimatorSettings s;
+    s.kind = EstimatorKind::Newton;
+    s.iterations = 8;
+    s.tolerance = 0.0;   // keep iterating at the root
+    s.eps = 0.01;
+    int bad = 0;
+    for (int k = 0; k < 64; ++k) {
+        const glm::dvec3 v(0.01 * k, 0.0, 0.0), r = glm::normalize(glm::dvec3(0.3 - 0.01 * k, 0.1, -1.0));
+        const EstimateResult e = estimate_intersection(tex, v, r, s, 0.0);
+        ASSERT_TRUE(e.hit);
+        EXPECT_LT(glm::length(e.point - (v + e.d * r)), 1e-9) << k;
+        bad += e.bad_derivative;
+    }
+    EXPECT_EQ(bad, 0);
+}
+
+// Past the first focus (floor 1.2 m, focus 0.64 m) the Snell map folds: every preimage's splat adds.
+// Flux is kept, the error is within the claim, and it falls with the grid (the map follows it).
+TEST(CausticMappingHard, PastTheFocusFoldsAreSummed) {
+    const SineSetup c = sine(0.0, -1.2, 0.5);
+    const Result r128 = run(c, {});
+    const Result r256 = run(c, {{"grid", "256"}});
+    std::printf("sine_deep: nrmse grid 128 %.4f, grid 256 %.4f, baseline %.4f\n", r128.nrmse, r256.nrmse, r128.baseline);
+    EXPECT_NEAR(r128.flux_ratio, 1.0, 0.01);
+    ASSERT_TRUE(r128.claim.inside);
+    EXPECT_DOUBLE_EQ(r128.claim.error_vs_baseline, kPastFocusFactor);
+    EXPECT_LT(r128.nrmse, r128.claim.error_vs_baseline * r128.baseline);
+    EXPECT_LT(r256.nrmse, r128.nrmse);
+}
+
+// The claim's bound: sine at normal incidence and at 30 deg are inside (and met), and so is flat water
+// (judged by flatness there: the baseline is exact); grazing light (80 deg) is outside, with the numbers in
+// the reason.
+TEST(CausticMappingHard, AccuracyClaimInsideAndOutside) {
+    for (double tilt : {0.0, 30.0}) {
+        const Result r = run(sine(tilt, -0.4), {});
+        ASSERT_TRUE(r.claim.inside) << tilt;
+        EXPECT_DOUBLE_EQ(r.claim.error_vs_baseline, kBeforeFocusFactor);
+        EXPECT_LT(r.nrmse, r.claim.error_vs_baseline * r.baseline) << tilt;
+    }
+    const SineSetup grazing = sine(80.0, -0.4);
+    const Scene g = test_support::make_sine_scene(grazing);
+    const FrameGeometry gf = build_frame_geometry(g, 0);
+    const AccuracyClaim gc = claim_for(gf, Settings{});
+    EXPECT_FALSE(gc.inside);
+    EXPECT_NE(gc.reason.find("80.0 deg"), std::string::npos) << gc.reason;
+    SineSetup flat = sine(30.0, -0.4, 0.5);
+    flat.amplitude = 1e-6;
+    const Scene fs = test_support::make_sine_scene(flat);
+    const FrameGeometry ff = build_frame_geometry(fs, 0);
+    const AccuracyClaim fc = claim_for(ff, Settings{});
+    EXPECT_TRUE(fc.inside) << fc.reason;
+    // One step of the paper's approximate iteration under tilted light is not claimed (measured 1.4 x the
+    // baseline on sine_oblique), nor measured here: the claim names the bound.
+    Settings approx_once;
+    approx_once.estimator.kind = EstimatorKind::Approx;
+    approx_once.estimator.iterations = 1;
+    const Scene os = test_support::make_sine_scene(sine(30.0, -0.4));
+    const FrameGeometry of = build_frame_geometry(os, 0);
+    const AccuracyClaim ac = claim_for(of, approx_once);
+    EXPECT_FALSE(ac.inside);
+    EXPECT_NE(ac.reason.find("approximate estimator"), std::string::npos) << ac.reason;
+    approx_once.estimator.iterations = kMinApproxIterations;
+    EXPECT_TRUE(claim_for(of, approx_once).inside);
+}
+
+// The elliptical splats are drawn by bands of rows with the splats in input order: the same bits for one
+// and two threads, and across repeated renders.
+TEST(CausticMappingHard, IdenticalForOneAndTwoThreads) {
+    const SineSetup c = sine(30.0, -0.4);
+    const Scene scene = test_support::make_sine_scene(c);
+    auto render = [&](int threads) {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+        return test_support::render_method("caustic_mapping", scene, {}, c.bins_x, c.bins_y).receiver;
+    };
+    const Image one = render(1), two = render(2), again = render(2);
+    ASSERT_EQ(one.pixels.size(), two.pixels.size());
+    EXPECT_EQ(std::memcmp(one.pixels.data(), two.pixels.data(), one.pixels.size() * sizeof(float)), 0);
+    EXPECT_EQ(std::memcmp(two.pixels.data(), again.pixels.data(), two.pixels.size() * sizeof(float)), 0);
+}

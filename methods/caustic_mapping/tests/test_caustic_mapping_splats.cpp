@@ -1,0 +1,140 @@
+// caustic_mapping: the adaptive splat footprint (methods/caustic_mapping/splats.hpp). The landing points
+// of a regular grid through an affine landing map J form a lattice whose spacings along the grid's axes
+// are |J (1, 0)| and |J (0, 1)|, so every footprint has a closed form, including those of texels whose
+// grid neighbours did not land (the object's silhouette, rays lost to TIR or a null value).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "../splats.hpp"
+#include <caustics/frame/frame.hpp>
+#include <caustics/frame/receiver_chart.hpp>
+#include <caustics/api/registry.hpp>
+
+using namespace caustics;
+using namespace caustics::caustic_mapping;
+
+namespace {
+
+constexpr int kGrid = 16;
+// The landing map: anisotropic and sheared, spacings |J(1,0)| = 5, |J(0,1)| = sqrt(8) (columns of J).
+const glm::vec2 kJx(3.0f, 4.0f), kJy(2.0f, -2.0f);
+
+std::vector<FaceSplat> lattice() {
+    std::vector<FaceSplat> landing(static_cast<std::size_t>(kGrid) * kGrid);
+    for (int y = 0; y < kGrid; ++y)
+        for (int x = 0; x < kGrid; ++x)
+            landing[static_cast<std::size_t>(y) * kGrid + x] =
+                {0, {glm::vec2(100.0f) + static_cast<float>(x) * kJx + static_cast<float>(y) * kJy, 1.0f}};
+    return landing;
+}
+
+void drop(std::vector<FaceSplat>& landing, int x, int y) { landing[static_cast<std::size_t>(y) * kGrid + x].splat.value = 0.0f; }
+
+// The footprint of the splat that texel (x, y) produced (splats come in row-major order of the texels).
+float radius_of(const std::vector<FaceSplat>& landing, const std::vector<Splat>& splats, int x, int y) {
+    std::size_t k = 0;
+    for (int j = 0; j < kGrid; ++j)
+        for (int i = 0; i < kGrid; ++i) {
+            if (!(landing[static_cast<std::size_t>(j) * kGrid + i].splat.value > 0.0f)) continue;
+            if (i == x && j == y) return splats[k].radius;
+            ++k;
+        }
+    ADD_FAILURE() << "texel " << x << "," << y << " has no splat";
+    return 0.0f;
+}
+
+float larger_spacing() { return std::max(glm::length(kJx), glm::length(kJy)); }
+
+}  // namespace
+
+TEST(CausticMappingSplats, AdaptiveRadiusFollowsTheLatticeSpacing) {
+    const std::vector<FaceSplat> landing = lattice();
+    std::vector<std::vector<Splat>> per_face(1);
+    EXPECT_EQ(build_splats(landing, kGrid, FootprintMode::Adaptive, 1.0f, per_face), 0);
+    ASSERT_EQ(per_face[0].size(), static_cast<std::size_t>(kGrid * kGrid));
+    for (const Splat& s : per_face[0]) EXPECT_FLOAT_EQ(s.radius, kAdaptiveScale * larger_spacing());
+}
+
+TEST(CausticMappingSplats, MissingAxisNeighboursUseTheDiagonals) {
+    // Texel (8, 8) keeps only its diagonal neighbours (a silhouette texel in a staircase). The larger
+    // diagonal spacing max |J(1,+-1)| lies in [max(|Jx|, |Jy|), |Jx| + |Jy|]: never the 1-texel minimum.
+    std::vector<FaceSplat> landing = lattice();
+    for (auto [dx, dy] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) drop(landing, 8 + dx, 8 + dy);
+    std::vector<std::vector<Splat>> per_face(1);
+    EXPECT_EQ(build_splats(landing, kGrid, FootprintMode::Adaptive, 1.0f, per_face), 0);
+    const float expected = kAdaptiveScale * std::max(glm::length(kJx + kJy), glm::length(kJx - kJy));
+    const float r = radius_of(landing, per_face[0], 8, 8);
+    EXPECT_FLOAT_EQ(r, expected);
+    EXPECT_GE(r, kAdaptiveScale * larger_spacing());
+    EXPECT_LE(r, kAdaptiveScale * (glm::length(kJx) + glm::length(kJy)));
+}
+
+TEST(CausticMappingSplats, IsolatedTexelUsesTheNearestLandedRing) {
+    // Only texels (2, 2) and (5, 2) land (3 grid texels apart along x): each one's footprint is the
+    // spacing that the pair implies, |J (3, 0)| / 3 = |Jx|; its flux is kept.
+    std::vector<FaceSplat> landing = lattice();
+    for (int y = 0; y < kGrid; ++y)
+        for (int x = 0; x < kGrid; ++x)
+            if (!(y == 2 && (x == 2 || x == 5))) drop(landing, x, y);
+    std::vector<std::vector<Splat>> per_face(1);
+    EXPECT_EQ(build_splats(landing, kGrid, FootprintMode::Adaptive, 1.0f, per_face), 0);
+    ASSERT_EQ(per_face[0].size(), 2u);
+    for (const Splat& s : per_face[0]) {
+        EXPECT_NEAR(s.radius, kAdaptiveScale * glm::length(kJx), 1e-4f);
+        EXPECT_EQ(s.value, 1.0f);
+    }
+}
+
+TEST(CausticMappingSplats, LoneTexelKeepsItsFluxAndIsCounted) {
+    // Two texels farther apart than the search window, and a third between them that lands on another
+    // face (not a neighbour of theirs): no spacing to go by. All keep their flux at the minimum footprint
+    // and are counted.
+    std::vector<FaceSplat> landing = lattice();
+    for (int y = 0; y < kGrid; ++y)
+        for (int x = 0; x < kGrid; ++x)
+            if (!(y == 1 && (x == 1 || x == 2 + kNeighbourSearch))) drop(landing, x, y);
+    landing[1 * kGrid + 2] = {1, {glm::vec2(50.0f), 1.0f}};   // lands on another cube face
+    std::vector<std::vector<Splat>> per_face(2);
+    EXPECT_EQ(build_splats(landing, kGrid, FootprintMode::Adaptive, 1.5f, per_face), 3);
+    ASSERT_EQ(per_face[0].size(), 2u);
+    ASSERT_EQ(per_face[1].size(), 1u);
+    for (const auto& face : per_face)
+        for (const Splat& s : face) {
+            EXPECT_FLOAT_EQ(s.radius, 1.5f);
+            EXPECT_EQ(s.value, 1.0f);
+        }
+}
+
+TEST(CausticMappingSplats, FixedModeIgnoresNeighbours) {
+    // splat=gaussian / point (the paper's fixed footprint) are untouched by the adaptive rules.
+    std::vector<FaceSplat> landing = lattice();
+    for (auto [dx, dy] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}}) drop(landing, 8 + dx, 8 + dy);
+    std::vector<std::vector<Splat>> per_face(1);
+    EXPECT_EQ(build_splats(landing, kGrid, FootprintMode::Fixed, 2.5f, per_face), 0);
+    for (const Splat& s : per_face[0]) EXPECT_FLOAT_EQ(s.radius, 2.5f);
+}
+
+TEST(CausticMappingSplats, SphereSilhouetteSplatsHaveNeighbours) {
+    // sphere.json at the defaults: the grid texels on the sphere's silhouette whose neighbours' rays are
+    // lost (exit estimate at the back face's rim) used to fall back to the 1-texel minimum and put their
+    // grazing rays' flux into isolated bright dots on the floor. Every splat must now find a spacing.
+    Scene scene = load_scene("scenes/sphere.json");
+    const MethodInfo& m = require_method("caustic_mapping");
+    std::unique_ptr<Method> method = m.create(ParamSet::resolve(m.name, m.params, {}));
+    FrameGeometry frame = build_frame_geometry(scene, 0);
+    ReceiverChart chart(frame, 64, 64);
+    method->prepare(scene);
+    method->update(frame);
+    RenderRequest request;
+    request.receiver = &chart;
+    const CausticOutput out = method->render(frame, request);
+    EXPECT_GT(out.health.get("splats"), 0);
+    EXPECT_EQ(out.health.get("isolated_splats"), 0);
+}
