@@ -4,7 +4,7 @@
 (value 0..1; the scene scales it by `amplitude`). Run with /usr/bin/python3 (needs numpy only; the PNG
 is encoded with zlib so that no imaging module is required). Deterministic.
 
-Image row 0 is the +y edge of the height field (north up, as harness/heightfield_image.cpp reads it).
+Image row 0 is the +y edge of the height field (north up, as harness/scene/heightfield/heightfield_image.cpp reads it).
 """
 import os
 import struct

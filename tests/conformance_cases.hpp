@@ -1,6 +1,6 @@
 #pragma once
 // The analytic cases of the conformance suite (tests/test_conformance.cpp): scenes whose receiver map has
-// an exact closed form (harness/analytic_truth.hpp), chosen to contain what a method's model may miss:
+// an exact closed form (harness/reference/analytic_truth.hpp), chosen to contain what a method's model may miss:
 // oblique light, a floor past the first focus (folds), ior = 1, Fresnel and absorption on a slanted path,
 // a 2-D (radial) caustic, a solid refractor whose map folds into a ring. Each is a shipped scene file
 // (scenes/README.md), so that sweeps and reports can run the same cases.

@@ -1,4 +1,4 @@
-// The ball lens's analytic truth (harness/analytic_truth_ball.cpp): its meridional map agrees with the
+// The ball lens's analytic truth (harness/reference/analytic_truth_ball.cpp): its meridional map agrees with the
 // independent trace of tests/ball_lens.hpp; the Monte Carlo reference agrees with the truth per receiver bin
 // within its own standard error (floor past the paraxial focus: the map folds into a ring caustic), and
 // the same statistic rejects a truth with a slightly wrong index; it declines Fresnel and tilted light.

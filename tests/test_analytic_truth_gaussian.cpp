@@ -1,4 +1,4 @@
-// The Gaussian bump's analytic truth (harness/analytic_truth_radial.cpp): the Monte Carlo reference agrees
+// The Gaussian bump's analytic truth (harness/reference/analytic_truth_radial.cpp): the Monte Carlo reference agrees
 // with it per receiver bin within its own standard error (Fresnel and absorption on), and the same
 // statistic rejects a truth with a slightly wrong index; on the axis it matches the paraxial closed form
 // E(0) = E0 T / (1 - (n - 1) / n * A / sigma^2 * L)^2 (L the apex's depth above the floor); ior = 1 is

@@ -1,5 +1,5 @@
 // The conformance suite: every registered method on every analytic case (tests/conformance_cases.hpp),
-// judged against the exact closed form of the case (harness/analytic_truth.hpp), in the manner of
+// judged against the exact closed form of the case (harness/reference/analytic_truth.hpp), in the manner of
 // pbrt-v4's integrator x analytic-scene tests. A method added later is in the suite without editing it.
 //
 // Per method and case, at the method's default parameters on the scene's receiver (256 x 256; the no-caustic

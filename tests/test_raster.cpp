@@ -1,4 +1,4 @@
-// The shared triangle raster (harness/raster.hpp): coverage by pixel centres with the top-left rule,
+// The shared triangle raster (harness/blocks/raster/raster.hpp): coverage by pixel centres with the top-left rule,
 // exact area coverage with flux conservation, toroidal wrap, determinism across thread counts.
 #include <gtest/gtest.h>
 

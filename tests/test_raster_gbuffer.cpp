@@ -1,4 +1,4 @@
-// The G-buffer raster, light projections and splats (harness/gbuffer_raster.hpp, light_projection.hpp,
+// The G-buffer raster, light projections and splats (harness/blocks/gbuffer/gbuffer_raster.hpp, light_projection.hpp,
 // splat.hpp): hand-computed coverage, the top-left rule on shared edges, depth test, culling,
 // perspective-correct attributes, splat normalisation (also at borders), low-pass conservation and
 // thread-count independence.

@@ -72,7 +72,7 @@ TEST(RunMeasures, TruthAndFrameTimeAreRecorded) {
     o.scene_path = scene("sine");
     o.method = "caustic_triangles";
     o.overrides = {{"grid", "64"}};
-    o.photons = 200'000;
+    o.reference.photons = 200'000;
     o.warmup = 1;
     o.repeats = 3;
     o.timing_max_s = 0.2;

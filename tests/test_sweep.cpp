@@ -94,7 +94,7 @@ TEST(SweepSpec, ValidSpecExpandsToCartesianProduct) {
     std::set<std::string> ids;
     for (const auto& r : runs) ids.insert(r.id);
     EXPECT_EQ(ids.size(), runs.size());
-    EXPECT_EQ(spec.photons, 20000u);
+    EXPECT_EQ(spec.reference.photons, 20000u);
 }
 
 TEST(SweepSpec, PerSceneFramesOverrideTheDefault) {

@@ -61,7 +61,7 @@ struct TextureRequest {
 // (tests/test_conformance.cpp) holds every registered method to it on analytic cases: inside the claimed
 // regime, the receiver error against the exact truth (nrmse; after the least-squares scale fit where the
 // output is not radiometric) is at most `error_vs_baseline` times the error of drawing no caustic (the
-// flat interface's irradiance, harness/baseline.hpp). Outside it (`inside` false), `reason` names the
+// flat interface's irradiance, harness/frame/baseline.hpp). Outside it (`inside` false), `reason` names the
 // bound the frame passes, with the numbers (e.g. "the floor lies 1.2 m down, past the first focus at
 // 0.64 m"): the method still renders, its error is still measured and reported, but nothing is claimed.
 // A case a method cannot render at all is refused by capabilities() instead.

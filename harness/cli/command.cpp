@@ -39,14 +39,6 @@ std::map<std::string, std::string> parse_assignments(const std::vector<std::stri
     return out;
 }
 
-CLI::Option* add_photons_option(CLI::App& app, std::uint64_t& photons, const std::string& doc) {
-    return add_integer_option(app, "--photons", photons, kMinPhotons, kMaxPhotons, doc)->capture_default_str();
-}
-
-CLI::Option* add_seed_option(CLI::App& app, std::uint64_t& seed, const std::string& doc) {
-    return add_integer_option(app, "--seed", seed, 0, kMaxSeed, doc)->capture_default_str();
-}
-
 CLI::Option* add_frame_option(CLI::App& app, int& frame) {
     return add_integer_option(app, "--frame", frame, 0, kMaxFrame, "Animation frame")->capture_default_str();
 }
@@ -60,19 +52,23 @@ CLI::Option* add_cache_option(CLI::App& app, std::string& cache_dir) {
                                     "Reference cache folder (default $CAUSTICS_CACHE_DIR or results/cache)");
 }
 
-void add_reference_sampling_options(CLI::App& app, SamplerKind& sampler, int& replicas, double& noise_target,
-                                    std::uint64_t& photon_cap) {
-    add_enum_option(app, "--sampler", sampler, {{"sobol", SamplerKind::Sobol}, {"independent", SamplerKind::Independent}},
+void add_reference_options(CLI::App& app, ReferenceSettings& s) {
+    using RS = ReferenceSettings;
+    add_integer_option(app, "--photons", s.photons, RS::kMinPhotons, RS::kMaxPhotons,
+                       "Reference photons (the first round's with a noise target)")
+        ->capture_default_str();
+    add_integer_option(app, "--seed", s.seed, 0, RS::kMaxSeed, "Reference photon RNG seed")->capture_default_str();
+    add_enum_option(app, "--sampler", s.sampler, {{"sobol", SamplerKind::Sobol}, {"independent", SamplerKind::Independent}},
                     "Reference emission samples: sobol (Owen-scrambled Sobol' in replicas) or independent")
         ->default_str("sobol");
-    add_integer_option(app, "--replicas", replicas, 2, ReferenceSettings::kMaxReplicas,
+    add_integer_option(app, "--replicas", s.replicas, RS::kMinReplicas, RS::kMaxReplicas,
                        "Independent replicas of the reference (standard error from their spread)")
         ->capture_default_str();
-    add_number_option(app, "--noise-target", noise_target, 0.0, 10.0,
+    add_number_option(app, "--noise-target", s.noise_target, 0.0, RS::kMaxNoiseTarget,
                       "Add reference photons in rounds until its noise_nrmse is at most this (0: fixed --photons)",
                       "0: fixed --photons")
         ->capture_default_str();
-    add_integer_option(app, "--photon-cap", photon_cap, kMinPhotons, kMaxPhotons,
+    add_integer_option(app, "--photon-cap", s.photon_cap, RS::kMinPhotons, RS::kMaxPhotons,
                        "Most photons a noise target may use (then reported as not met)")
         ->capture_default_str();
 }

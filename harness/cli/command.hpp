@@ -32,28 +32,26 @@ struct CommandRegistrar {
     explicit CommandRegistrar(Command (*make)());
 };
 
-// Ranges of the options that several commands share. They follow the sweep spec's fields
-// (harness/sweep_spec.cpp: reference.photons, reference.seed, frames, timing.warmup, timing.repeats), so
-// that anything a command line asks for a sweep can ask for too.
-inline constexpr std::int64_t kMinPhotons = 1000;
-inline constexpr std::int64_t kMaxPhotons = 100'000'000'000;   // 1e11
-inline constexpr std::int64_t kMaxSeed = std::int64_t{1} << 62;
+// Ranges of the options that several commands share. The reference's come from ReferenceSettings, which
+// the sweep spec's reference fields check against too, so that anything a command line asks for a sweep
+// can ask for too.
+inline constexpr std::int64_t kMinPhotons = ReferenceSettings::kMinPhotons;
+inline constexpr std::int64_t kMaxPhotons = ReferenceSettings::kMaxPhotons;
+inline constexpr std::int64_t kMaxSeed = ReferenceSettings::kMaxSeed;
 inline constexpr std::int64_t kMaxFrame = 1'000'000;           // the scene's own frame count is checked on loading
 inline constexpr std::int64_t kMaxThreads = 4096;
 inline constexpr std::int64_t kMaxWarmup = 10'000;
 inline constexpr std::int64_t kMaxRepeats = 100'000;
 
-// --photons, --seed, --frame, --threads, --cache with the ranges above (options.hpp checks them).
-CLI::Option* add_photons_option(CLI::App& app, std::uint64_t& photons, const std::string& doc);
-CLI::Option* add_seed_option(CLI::App& app, std::uint64_t& seed, const std::string& doc);
+// --frame, --threads, --cache with the ranges above (options.hpp checks them).
 CLI::Option* add_frame_option(CLI::App& app, int& frame);
 CLI::Option* add_threads_option(CLI::App& app, int& threads, const std::string& doc);
 CLI::Option* add_cache_option(CLI::App& app, std::string& cache_dir);
 
-// The reference's sampling options shared by `reference` and `render`: --sampler, --replicas,
-// --noise-target, --photon-cap, checked as the sweep spec's reference fields are.
-void add_reference_sampling_options(CLI::App& app, SamplerKind& sampler, int& replicas, double& noise_target,
-                                    std::uint64_t& photon_cap);
+// The reference options shared by `reference` and `render`, bound to `settings`: --photons, --seed,
+// --sampler, --replicas, --noise-target, --photon-cap (the arguments reference_arguments() writes),
+// checked against ReferenceSettings' ranges as the sweep spec's reference fields are.
+void add_reference_options(CLI::App& app, ReferenceSettings& settings);
 
 // --set KEY=VALUE assignments; throws InputError for one without '=' or a KEY given twice.
 std::map<std::string, std::string> parse_assignments(const std::vector<std::string>& sets, const std::string& option);

@@ -15,16 +15,11 @@ namespace fs = std::filesystem;
 
 struct ReferenceArgs {
     std::string scene;
-    std::uint64_t photons = 10'000'000;
     int frame = 0;
     std::string out;
     int threads = 0;
-    std::uint64_t seed = 1;
     std::string cache;
-    SamplerKind sampler = SamplerKind::Sobol;
-    int replicas = ReferenceSettings::kDefaultReplicas;
-    double noise_target = 0.0;
-    std::uint64_t photon_cap = ReferenceSettings::kDefaultPhotonCap;
+    ReferenceSettings reference;
 };
 
 int run_reference(const ReferenceArgs& a) {
@@ -38,14 +33,9 @@ int run_reference(const ReferenceArgs& a) {
     Scene scene = load_scene(path);
     const SceneFrame sf(std::move(scene), a.frame);
     RenderOptions options;
-    options.photons = a.photons;
-    options.seed = a.seed;
+    options.reference = a.reference;
     options.threads = a.threads;
     options.cache_dir = a.cache;
-    options.sampler = a.sampler;
-    options.replicas = a.replicas;
-    options.noise_target = a.noise_target;
-    options.photon_cap = a.photon_cap;
     const ReferenceResult ref = reference_for(sf, options);
     write_reference_outputs(out, sf.scene(), a.frame, ref);
     std::cout << "reference " << sf.scene().name << " frame " << a.frame << ": " << ref.photons << " photons, "
@@ -67,13 +57,11 @@ Command make_reference_command() {
     c.setup = [](CLI::App& app) -> std::function<int()> {
         auto a = std::make_shared<ReferenceArgs>();
         add_scene_argument(app, a->scene, "Scene file, or a scene name in scenes/ (e.g. pool)")->required();
-        add_photons_option(app, a->photons, "Photons to trace");
         add_frame_option(app, a->frame);
         add_output_folder_option(app, "--out", a->out, "Output folder (default results/reference/<scene>/frame<F>)");
         add_threads_option(app, a->threads, "Worker threads (0: all cores)");
-        add_seed_option(app, a->seed, "Photon RNG seed");
         add_cache_option(app, a->cache);
-        add_reference_sampling_options(app, a->sampler, a->replicas, a->noise_target, a->photon_cap);
+        add_reference_options(app, a->reference);
         return [a]() { return run_reference(*a); };
     };
     return c;

@@ -72,13 +72,11 @@ Command make_render_command() {
         add_frame_option(app, o.frame);
         add_output_folder_option(app, "--out", o.out_dir, "Output folder (default results/render/<scene>/<method>)");
         app.add_flag("--no-reference", o.no_reference, "Do not compute the reference; error values are null");
-        add_photons_option(app, o.photons, "Reference photons");
         add_integer_option(app, "--warmup", o.warmup, 0, kMaxWarmup, "Untimed renders before timing")->capture_default_str();
         add_integer_option(app, "--repeats", o.repeats, 1, kMaxRepeats, "Timed renders at least")->capture_default_str();
         add_threads_option(app, o.threads, "Worker threads (0: all cores)");
-        add_seed_option(app, o.seed, "Reference photon RNG seed");
         add_cache_option(app, o.cache_dir);
-        add_reference_sampling_options(app, o.sampler, o.replicas, o.noise_target, o.photon_cap);
+        add_reference_options(app, o.reference);
         add_choice_option(app, "--truth", o.truth, {"auto", "analytic", "reference"},
                           "Receiver ground truth: auto (the analytic closed form where the scene has one, else the "
                           "reference), analytic (say so where there is none) or reference")

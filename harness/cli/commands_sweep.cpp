@@ -33,7 +33,7 @@ Command make_sweep_command() {
             ->required();
         add_output_folder_option(app, "--out", o->out_dir, "Output folder (default results/sweeps/<spec name>)");
         app.add_flag("--resume", o->resume, "Continue a sweep in --out: skip finished runs, redo a cut-off one");
-        app.add_option("--axis", o->axis_overrides, "Override an axis: METHOD.AXIS=VALUES, e.g. caustic_triangles.grid=[64,128]")
+        app.add_option("--axis", o->axis_overrides, "Override an axis: METHOD.AXIS=VALUES, e.g. my_method.grid=[64,128]")
             ->expected(1)
             ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
         app.add_flag("--yes", o->yes, "Run a sweep of more than 500 runs");

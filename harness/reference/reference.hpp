@@ -51,8 +51,15 @@ struct ReferenceSettings {
     bool progress = true;       // progress bar on stderr when it runs longer than a second
 
     static constexpr int kDefaultReplicas = 8;
-    static constexpr int kMaxReplicas = 256;
     static constexpr std::uint64_t kDefaultPhotonCap = 2'000'000'000;
+    // The valid settings, in one place: the command line (--photons, --seed, --replicas, --noise-target,
+    // --photon-cap) and the sweep spec's reference fields check against these.
+    static constexpr std::uint64_t kMinPhotons = 1000;
+    static constexpr std::uint64_t kMaxPhotons = 100'000'000'000;   // 1e11
+    static constexpr std::uint64_t kMaxSeed = std::uint64_t{1} << 62;
+    static constexpr int kMinReplicas = 2;
+    static constexpr int kMaxReplicas = 256;
+    static constexpr double kMaxNoiseTarget = 10.0;
 };
 
 // The integer sums a reference is made of, kept so that it can be cached and extended. Fixed point:

@@ -8,21 +8,17 @@
 #include <stdexcept>
 #include <vector>
 
-#include <tbb/global_control.h>
-
 #include <caustics/reference/analytic_truth.hpp>
 #include <caustics/frame/baseline.hpp>
 #include <caustics/run/beauty.hpp>
 #include <caustics/util/errors.hpp>
 #include <caustics/util/image_io.hpp>
 #include <caustics/run/metrics.hpp>
+#include <caustics/run/metrics_json.hpp>
 #include <caustics/api/registry.hpp>
 #include <caustics/run/run_errors.hpp>
 #include <caustics/util/timing.hpp>
 
-#ifndef CAUSTICS_BUILD_TYPE
-#define CAUSTICS_BUILD_TYPE "unknown"
-#endif
 #ifndef CAUSTICS_SOURCE_DIR
 #define CAUSTICS_SOURCE_DIR "."
 #endif
@@ -53,48 +49,6 @@ void check_size(const Image& image, int w, int h, const std::string& method, con
                                  std::to_string(h) + "x1");
 }
 
-json timing_json(const TimingSummary* t) {
-    if (!t || t->samples == 0)
-        return {{"median", nullptr}, {"min", nullptr}, {"p90", nullptr}, {"stdev", nullptr}, {"iqr", nullptr}, {"ci_rel", nullptr}};
-    return {{"median", json_number(t->median)}, {"min", json_number(t->min)}, {"p90", json_number(t->p90)},
-            {"stdev", json_number(t->stdev)}, {"iqr", json_number(t->iqr)},
-            {"ci_rel", t->has_interval ? json_number(t->ci_rel) : json(nullptr)}};
-}
-
-// The metrics.json skeleton: every key of DESIGN.md section 7, values null until measured.
-json metrics_skeleton(const SceneFrame& sf, const ResolvedMethod& m, const RenderOptions& options) {
-    json j;
-    j["method"] = m.info->name;
-    j["scene"] = sf.scene().name;
-    j["frame"] = sf.geometry().frame;
-    j["params"] = params_json(*m.info, m.params);
-    j["radiometric"] = m.info->radiometric_at(m.params);
-    j["time_ms"] = timing_json(nullptr);
-    j["frame_ms"] = timing_json(nullptr);
-    j["frame_time"] = nullptr;
-    j["fps"] = nullptr;
-    j["render_fps"] = nullptr;
-    j["noisy_timing"] = nullptr;
-    j["prepare_ms"] = nullptr;
-    j["update_ms"] = nullptr;
-    j["stages_ms"] = json::object();
-    j["threads"] = ThreadLimit::effective();
-    j["error"] = {{"receiver", null_view_errors()}, {"camera", null_view_errors()}};
-    j["reference"] = {{"photons", nullptr}, {"noise_nrmse", nullptr}, {"cache_key", nullptr}};
-    j["truth"] = {{"kind", nullptr}, {"noise_nrmse", nullptr}};
-    j["baseline"] = {{"kind", nullptr}, {"error", nullptr}};
-    j["health"] = json::object();
-    j["status"] = nullptr;
-    j["build_type"] = CAUSTICS_BUILD_TYPE;
-    j["warmup"] = options.warmup;
-    j["repeats"] = options.repeats;
-    j["below_reference_noise"] = nullptr;
-    j["no_better_than_flat"] = nullptr;
-    j["claim"] = {{"inside", nullptr}, {"error_vs_baseline", nullptr}, {"reason", nullptr}, {"met", nullptr}};
-    j["message"] = "";
-    return j;
-}
-
 std::string join_messages(const std::vector<std::string>& parts) {
     std::string s;
     for (const auto& p : parts) s += (s.empty() ? "" : "; ") + p;
@@ -102,24 +56,6 @@ std::string join_messages(const std::vector<std::string>& parts) {
 }
 
 }  // namespace
-
-json params_json(const MethodInfo& info, const ParamSet& params) {
-    json out = json::object();
-    for (const ParamSpec& spec : info.params) {
-        auto it = params.values().find(spec.name);
-        if (it == params.values().end()) continue;
-        const std::string& text = it->second;
-        switch (spec.type) {
-        case ParamType::Int: out[spec.name] = std::stoll(text); break;
-        case ParamType::Float: out[spec.name] = json_number(std::stod(text)); break;
-        case ParamType::Bool: out[spec.name] = text == "true"; break;
-        case ParamType::Enum: out[spec.name] = text; break;
-        }
-    }
-    return out;
-}
-
-json json_number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 
 // ---------------------------------------------------------------------------------------------------
 
@@ -158,40 +94,6 @@ std::string resolve_scene_path(const std::string& arg) {
         throw invalid_value(arg, "no such scene file, nor a scene of that name", valid());
     }
     throw invalid_value(arg, "no such scene file", valid());
-}
-
-SceneFrame::SceneFrame(Scene scene, int frame)
-    : scene_(std::move(scene)), geometry_(build_frame_geometry(scene_, frame)) {
-    tracer_ = std::make_unique<RayTracer>(geometry_);
-    chart_ = std::make_unique<ReceiverChart>(geometry_, scene_.receiver.width, scene_.receiver.height);
-    gbuffer_ = build_camera_gbuffer(*tracer_, scene_.camera);
-}
-
-ResolvedMethod resolve_method(const std::string& name, const std::map<std::string, std::string>& overrides) {
-    ResolvedMethod r;
-    r.info = &require_method(name);
-    r.params = ParamSet::resolve(name, r.info->params, overrides);
-    return r;
-}
-
-ReferenceSettings reference_settings(const RenderOptions& options) {
-    ReferenceSettings settings;
-    settings.photons = options.photons;
-    settings.seed = options.seed;
-    settings.sampler = options.sampler;
-    settings.replicas = options.replicas;
-    settings.noise_target = options.noise_target;
-    settings.photon_cap = options.photon_cap;
-    settings.threads = options.threads;
-    settings.camera_view = true;
-    settings.progress = options.progress;
-    return settings;
-}
-
-ReferenceResult reference_for(const SceneFrame& sf, const RenderOptions& options) {
-    const ReferenceSettings settings = reference_settings(options);
-    const std::string cache = options.cache_dir.empty() ? default_cache_dir() : options.cache_dir;
-    return load_or_compute_reference(sf.geometry(), sf.tracer(), sf.chart(), &sf.gbuffer(), settings, cache);
 }
 
 RenderRun run_method(const SceneFrame& sf, const ResolvedMethod& m, const RenderOptions& options,
@@ -360,38 +262,6 @@ RenderRun run_method(const SceneFrame& sf, const ResolvedMethod& m, const Render
     return run;
 }
 
-void write_render_outputs(const std::string& dir, const SceneFrame& sf, const RenderRun& run,
-                          const RenderOptions& options) {
-    fs::create_directories(dir);
-    const fs::path d(dir);
-    if (run.status != "skipped") {
-        const CausticOutput& out = run.output;
-        if (!out.receiver.empty()) write_exr(out.receiver, (d / "receiver.exr").string());
-        if (!out.receiver_rgb.empty()) write_exr(out.receiver_rgb, (d / "receiver_rgb.exr").string());
-        if (!out.camera.empty()) {
-            // Only covered pixels carry a value; the rest is written as 0.
-            Image camera = out.camera;
-            const auto& covered = sf.gbuffer().covered;
-            for (std::size_t p = 0; p < covered.size(); ++p)
-                if (!covered[p]) camera.pixels[p] = 0.0f;
-            write_exr(camera, (d / "camera.exr").string());
-        }
-        for (const auto& [name, image] : out.debug)
-            if (!image.empty() && (image.channels == 1 || image.channels == 3))
-                write_exr(image, (d / ("debug_" + name + ".exr")).string());
-        if (options.beauty) {
-            BeautyInputs in;
-            in.gbuffer = &sf.gbuffer();
-            in.camera_ec = &out.camera;
-            in.chart = &sf.chart();
-            in.receiver_ec = &out.receiver;
-            write_beauty_png(render_beauty(sf.tracer(), in), (d / "beauty.png").string());
-        }
-    }
-    // metrics.json last: its presence says the run's files are complete.
-    write_text_atomic((d / "metrics.json").string(), run.metrics.dump(2) + "\n");
-}
-
 RenderRun run_render(const RenderOptions& options) {
     ThreadLimit limit(options.threads);
     // Every InputError comes from these three steps, before anything is written.
@@ -413,77 +283,6 @@ RenderRun run_render(const RenderOptions& options) {
 
 // ---------------------------------------------------------------------------------------------------
 
-nlohmann::json reference_summary_json(const ReferenceResult& ref) {
-    return {{"photons", ref.photons},
-            {"noise_nrmse", json_number(ref.noise_nrmse)},
-            {"noise_nrmse_camera", json_number(ref.noise_nrmse_camera)},
-            {"cache_key", ref.cache_key},
-            {"sampler", sampler_name(ref.sampler)},
-            {"replicas", ref.replicas},
-            {"noise_target", ref.noise_target > 0.0 ? json_number(ref.noise_target) : json(nullptr)},
-            {"noise_target_met", ref.noise_target > 0.0 ? json(ref.noise_target_met) : json(nullptr)}};
-}
-
-nlohmann::json reference_json(const Scene& scene, int frame, const ReferenceResult& ref) {
-    const FluxLedger& l = ref.ledger;
-    json j = reference_summary_json(ref);
-    j["scene"] = scene.name;
-    j["scene_path"] = scene.path;
-    j["frame"] = frame;
-    j["seed"] = ref.seed;
-    j["rounds"] = ref.rounds;
-    j["round_photons"] = ref.round_photons;
-    json noise = json::array();
-    for (double v : ref.round_noise) noise.push_back(json_number(v));
-    j["round_noise"] = noise;
-    j["photons_traced"] = ref.photons_traced;
-    j["seconds"] = json_number(ref.seconds);
-    j["from_cache"] = ref.from_cache;
-    j["photons_per_second"] = ref.seconds > 0.0 ? json_number(static_cast<double>(ref.photons) / ref.seconds)
-                                                : json(nullptr);
-    j["receiver"] = {{"object", scene.receiver.object}, {"width", ref.receiver.width}, {"height", ref.receiver.height}};
-    j["camera"] = {{"width", ref.camera.width}, {"height", ref.camera.height}};
-    j["ledger"] = {{"emitted", l.emitted},
-                   {"deposited_receiver", l.deposited_receiver},
-                   {"deposited_other", l.deposited_other},
-                   {"direct", l.direct},
-                   {"escaped", l.escaped},
-                   {"absorbed", l.absorbed},
-                   {"truncated", l.truncated},
-                   {"accounted", l.accounted()},
-                   {"relative_imbalance",
-                    l.emitted > 0.0 ? json_number((l.accounted() - l.emitted) / l.emitted) : json(nullptr)}};
-    j["build_type"] = CAUSTICS_BUILD_TYPE;
-    j["threads"] = ThreadLimit::effective();
-    return j;
-}
-
-void write_reference_outputs(const std::string& dir, const Scene& scene, int frame, const ReferenceResult& ref) {
-    fs::create_directories(dir);
-    const fs::path d(dir);
-    if (!ref.receiver.empty()) write_exr(ref.receiver, (d / "reference_receiver.exr").string());
-    if (!ref.camera.empty()) write_exr(ref.camera, (d / "reference_camera.exr").string());
-    if (!ref.receiver_stderr.empty()) write_exr(ref.receiver_stderr, (d / "reference_stderr.exr").string());
-    if (!ref.camera_stderr.empty()) write_exr(ref.camera_stderr, (d / "reference_camera_stderr.exr").string());
-    write_text_atomic((d / "reference.json").string(), reference_json(scene, frame, ref).dump(2) + "\n");
-}
-
 // ---------------------------------------------------------------------------------------------------
-
-struct ThreadLimit::Impl {
-    std::unique_ptr<tbb::global_control> control;
-};
-
-ThreadLimit::ThreadLimit(int threads) : impl_(std::make_unique<Impl>()) {
-    if (threads > 0)
-        impl_->control = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
-                                                               static_cast<std::size_t>(threads));
-}
-
-ThreadLimit::~ThreadLimit() = default;
-
-int ThreadLimit::effective() {
-    return static_cast<int>(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
-}
 
 }  // namespace caustics

@@ -21,32 +21,14 @@
 #include <caustics/frame/receiver_chart.hpp>
 #include <caustics/reference/reference.hpp>
 #include <caustics/scene/scene.hpp>
+#include <caustics/run/metrics_json.hpp>
+#include <caustics/run/render_options.hpp>
+#include <caustics/run/resolved_method.hpp>
+#include <caustics/run/run_reference.hpp>
+#include <caustics/run/scene_frame.hpp>
+#include <caustics/run/thread_limit.hpp>
 
 namespace caustics {
-
-struct RenderOptions {
-    std::string scene_path;
-    std::string method;
-    std::map<std::string, std::string> overrides;   // --set KEY=VALUE
-    int frame = 0;
-    std::string out_dir;                            // empty: write no files
-    int warmup = 3;
-    int repeats = 10;                               // timed frames at least (then until precise or capped)
-    double timing_precision = 0.05;                 // relative half-width of the median's 95 % interval
-    double timing_max_s = 3.0;                      // time cap of the timed frames [s]
-    std::uint64_t photons = 4'000'000;              // reference photons (the first round with a noise target)
-    std::uint64_t seed = 1;                         // reference seed
-    SamplerKind sampler = SamplerKind::Sobol;       // reference sampler
-    int replicas = ReferenceSettings::kDefaultReplicas;
-    double noise_target = 0.0;                      // > 0: reference photons until noise_nrmse <= target
-    std::uint64_t photon_cap = ReferenceSettings::kDefaultPhotonCap;
-    std::string truth = "auto";                     // receiver truth: auto | analytic | reference
-    bool no_reference = false;                      // skip the reference: error values are null
-    std::string cache_dir;                          // reference cache; empty: default_cache_dir()
-    int threads = 0;                                // 0: every core
-    bool beauty = true;                             // render beauty.png when writing files
-    bool progress = true;                           // reference progress bar on stderr
-};
 
 // A scene argument: an existing path as is, else a name in the scenes folder ("pool" ->
 // scenes/pool.json). Throws InputError (exit 2) for an empty argument, a symbolic link loop, and a path
@@ -56,35 +38,6 @@ std::string resolve_scene_path(const std::string& arg);
 std::string scenes_directory();
 // The names of the scene files in the scenes folder ("pool" for scenes/pool.json), sorted.
 std::vector<std::string> scene_names();
-
-// Everything about one (scene, frame) that does not depend on the method. Neither copyable nor
-// movable: the frame geometry, tracer and chart point into it.
-class SceneFrame {
-public:
-    SceneFrame(Scene scene, int frame);   // throws InputError for a frame out of range
-    SceneFrame(const SceneFrame&) = delete;
-    SceneFrame& operator=(const SceneFrame&) = delete;
-
-    const Scene& scene() const { return scene_; }
-    const FrameGeometry& geometry() const { return geometry_; }
-    const RayTracer& tracer() const { return *tracer_; }
-    const ReceiverChart& chart() const { return *chart_; }
-    const CameraGBuffer& gbuffer() const { return gbuffer_; }
-
-private:
-    Scene scene_;
-    FrameGeometry geometry_;
-    std::unique_ptr<RayTracer> tracer_;
-    std::unique_ptr<ReceiverChart> chart_;
-    CameraGBuffer gbuffer_;
-};
-
-struct ResolvedMethod {
-    const MethodInfo* info = nullptr;
-    ParamSet params;
-};
-// require_method + ParamSet::resolve: InputError for an unknown method, key or value.
-ResolvedMethod resolve_method(const std::string& name, const std::map<std::string, std::string>& overrides);
 
 struct RenderRun {
     std::string status;            // "ok", "skipped" (unsupported scene), "unstable" (non-finite output)
@@ -103,11 +56,6 @@ using ReferenceProvider = std::function<const ReferenceResult*()>;
 RenderRun run_method(const SceneFrame& sf, const ResolvedMethod& method, const RenderOptions& options,
                      const ReferenceProvider& reference);
 
-// The reference settings the options ask for (photons, seed, sampler, replicas, noise target, threads).
-ReferenceSettings reference_settings(const RenderOptions& options);
-// The reference for a scene frame with the options' settings and cache folder.
-ReferenceResult reference_for(const SceneFrame& sf, const RenderOptions& options);
-
 // Writes DIR/receiver.exr, DIR/camera.exr, DIR/beauty.png (when options.beauty), DIR/metrics.json and
 // any debug images (DIR/debug_<name>.exr).
 void write_render_outputs(const std::string& dir, const SceneFrame& sf, const RenderRun& run,
@@ -115,32 +63,5 @@ void write_render_outputs(const std::string& dir, const SceneFrame& sf, const Re
 
 // The whole `caustics render`: every InputError is thrown before anything is written.
 RenderRun run_render(const RenderOptions& options);
-
-// reference_receiver.exr, reference_camera.exr, reference_stderr.exr (receiver standard error) and
-// reference.json (photons, seed, noise, cache key, flux ledger, timing).
-nlohmann::json reference_json(const Scene& scene, int frame, const ReferenceResult& ref);
-// metrics.json's `reference` block: photons, noise, cache key, sampler, replicas, noise target and whether met.
-nlohmann::json reference_summary_json(const ReferenceResult& ref);
-void write_reference_outputs(const std::string& dir, const Scene& scene, int frame, const ReferenceResult& ref);
-
-// Limits TBB to `threads` workers for its lifetime (0: no limit) and reports the effective count.
-class ThreadLimit {
-public:
-    explicit ThreadLimit(int threads);
-    ~ThreadLimit();
-    ThreadLimit(const ThreadLimit&) = delete;
-    ThreadLimit& operator=(const ThreadLimit&) = delete;
-    static int effective();
-
-private:
-    struct Impl;
-    std::unique_ptr<Impl> impl_;
-};
-
-// The resolved parameters as typed JSON (ints, numbers, booleans, strings): metrics.json's `params`.
-nlohmann::json params_json(const MethodInfo& info, const ParamSet& params);
-
-// JSON number, or null when not finite (metrics.json never holds NaN or Inf).
-nlohmann::json json_number(double v);
 
 }  // namespace caustics

@@ -1,4 +1,5 @@
 #include <caustics/run/run_context.hpp>
+#include <caustics/util/build_info.hpp>
 
 #include <unistd.h>
 
@@ -55,9 +56,9 @@ nlohmann::json run_context() {
                  {"cpu", cpu_model()},
                  {"cores", std::thread::hardware_concurrency()}};
     c["threads"] = tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
-    c["build_type"] = CAUSTICS_BUILD_TYPE;
+    c["build_type"] = build_type();
     c["compiler"] = std::string("g++ ") + __VERSION__;
-    c["project_version"] = CAUSTICS_VERSION;
+    c["project_version"] = project_version();
     c["git_commit"] = git_commit();
     c["libraries"] = {{"embree", RTC_VERSION_STRING},
                       {"openimageio", OIIO_VERSION_STRING},

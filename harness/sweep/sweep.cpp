@@ -191,12 +191,13 @@ json sweep_plan(const SweepSpec& spec, const std::vector<PlannedRun>& runs, cons
         scenes[fs::path(scene.path).stem().string()] = {
             {"file_hash", scene_hashes[i]},
             {"frames", scene.frames},
-            {"noise_target", scene.noise_target >= 0.0 ? scene.noise_target : spec.noise_target},
+            {"noise_target", scene.noise_target >= 0.0 ? scene.noise_target : spec.reference.noise_target},
             {"truth", scene.truth.empty() ? spec.truth : scene.truth}};
     }
     plan["scenes"] = scenes;
-    plan["reference"] = {{"photons", spec.photons}, {"seed", spec.seed}, {"photon_cap", spec.photon_cap},
-                         {"sampler", spec.sampler}, {"replicas", spec.replicas}};
+    const ReferenceSettings& r = spec.reference;
+    plan["reference"] = {{"photons", r.photons}, {"seed", r.seed}, {"photon_cap", r.photon_cap},
+                         {"sampler", sampler_name(r.sampler)}, {"replicas", r.replicas}};
     plan["timing"] = {{"warmup", spec.warmup}, {"repeats", spec.repeats}, {"precision", spec.timing_precision},
                       {"max_time_s", spec.timing_max_s}, {"timeout_s", timeout_s}, {"threads", threads}};
     json methods = json::object();
@@ -308,12 +309,8 @@ json check_resume(const fs::path& dir, const json& plan, const SweepSpec& spec) 
 
 // The reference the run's children will ask for, so the parent's computation fills their cache entry.
 void apply_reference_options(const SweepSpec& spec, const PlannedRun& run, RenderOptions& ro) {
-    ro.photons = spec.photons;
-    ro.seed = spec.seed;
-    ro.noise_target = run.noise_target;
-    ro.photon_cap = spec.photon_cap;
-    parse_sampler(spec.sampler, ro.sampler);
-    ro.replicas = spec.replicas;
+    ro.reference = spec.reference;
+    ro.reference.noise_target = run.noise_target;
 }
 
 }  // namespace
@@ -515,14 +512,13 @@ SweepSummary run_sweep(const SweepOptions& options) {
 
         std::vector<std::string> argv = {program, "render", run.scene_path, "--method", run.method,
                                          "--frame", std::to_string(run.frame), "--out", run_dir.string(),
-                                         "--photons", std::to_string(spec.photons), "--seed", std::to_string(spec.seed),
                                          "--warmup", std::to_string(spec.warmup), "--repeats", std::to_string(spec.repeats),
                                          "--timing-precision", number_text(spec.timing_precision),
                                          "--max-time", number_text(spec.timing_max_s), "--truth", run.truth,
-                                         "--sampler", spec.sampler, "--replicas", std::to_string(spec.replicas),
-                                         "--noise-target", number_text(run.noise_target),
-                                         "--photon-cap", std::to_string(spec.photon_cap),
                                          "--threads", std::to_string(options.threads), "--cache", cache};
+        ReferenceSettings asked = spec.reference;
+        asked.noise_target = run.noise_target;
+        for (std::string& a : reference_arguments(asked)) argv.push_back(std::move(a));
         for (const auto& [k, v] : run.params) {
             argv.push_back("--set");
             argv.push_back(k + "=" + v);

@@ -294,7 +294,7 @@ SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string
     for (const auto& text : axis_overrides) {
         const auto eq = text.find('='), dot = text.find('.');
         if (eq == std::string::npos || dot == std::string::npos || dot > eq)
-            throw InputError("--axis", text, "expected METHOD.AXIS=VALUES, e.g. caustic_mapping.iterations=[1,2,4]");
+            throw InputError("--axis", text, "expected METHOD.AXIS=VALUES, e.g. my_method.iterations=[1,2,4]");
         const std::string method = text.substr(0, dot), axis = text.substr(dot + 1, eq - dot - 1);
         if (!overridden.insert(method + "." + axis).second)
             throw InputError("--axis", text, method + "." + axis + " is given twice on the command line; give each axis once");
@@ -364,17 +364,16 @@ SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string
         const json& r = root["reference"];
         if (!r.is_object()) throw InputError(path, "reference", "must be an object {\"photons\": N, \"seed\": S}");
         check_keys(r, {"photons", "seed", "noise_target", "photon_cap", "sampler", "replicas"}, path, "reference");
-        if (r.contains("noise_target")) spec.noise_target = require_number(r["noise_target"], "reference.noise_target", 0.0, 10.0);
+        using RS = ReferenceSettings;
+        ReferenceSettings& s = spec.reference;
+        if (r.contains("noise_target")) s.noise_target = require_number(r["noise_target"], "reference.noise_target", 0.0, RS::kMaxNoiseTarget);
         if (r.contains("photon_cap"))
-            spec.photon_cap = static_cast<std::uint64_t>(require_integer(r["photon_cap"], path, "reference.photon_cap", 1000, 100'000'000'000LL));
-        if (r.contains("replicas")) spec.replicas = static_cast<int>(require_integer(r["replicas"], path, "reference.replicas", 2, 256));
-        if (r.contains("sampler")) {
-            if (!r["sampler"].is_string() || (r["sampler"] != "sobol" && r["sampler"] != "independent"))
-                throw InputError(path, "reference.sampler", "must be \"sobol\" or \"independent\"");
-            spec.sampler = r["sampler"].get<std::string>();
-        }
-        if (r.contains("photons")) spec.photons = static_cast<std::uint64_t>(require_integer(r["photons"], path, "reference.photons", 1000, 100'000'000'000LL));
-        if (r.contains("seed")) spec.seed = static_cast<std::uint64_t>(require_integer(r["seed"], path, "reference.seed", 0, 1LL << 62));
+            s.photon_cap = static_cast<std::uint64_t>(require_integer(r["photon_cap"], path, "reference.photon_cap", RS::kMinPhotons, RS::kMaxPhotons));
+        if (r.contains("replicas")) s.replicas = static_cast<int>(require_integer(r["replicas"], path, "reference.replicas", RS::kMinReplicas, RS::kMaxReplicas));
+        if (r.contains("sampler") && (!r["sampler"].is_string() || !parse_sampler(r["sampler"].get<std::string>(), s.sampler)))
+            throw InputError(path, "reference.sampler", "must be \"sobol\" or \"independent\"");
+        if (r.contains("photons")) s.photons = static_cast<std::uint64_t>(require_integer(r["photons"], path, "reference.photons", RS::kMinPhotons, RS::kMaxPhotons));
+        if (r.contains("seed")) s.seed = static_cast<std::uint64_t>(require_integer(r["seed"], path, "reference.seed", 0, RS::kMaxSeed));
     }
     if (root.contains("timing")) {
         const json& t = root["timing"];
@@ -477,7 +476,7 @@ std::vector<PlannedRun> plan_runs(const SweepSpec& spec) {
                     run.scene_path = scene_path;
                     run.scene_name = scene_name;
                     run.frame = frame;
-                    run.noise_target = scene.noise_target >= 0.0 ? scene.noise_target : spec.noise_target;
+                    run.noise_target = scene.noise_target >= 0.0 ? scene.noise_target : spec.reference.noise_target;
                     run.truth = scene.truth.empty() ? spec.truth : scene.truth;
                     run.method = m.method;
                     run.id = safe_token(scene_name) + "-f" + std::to_string(frame) + "-" + safe_token(m.method);

@@ -16,9 +16,9 @@
 //              "precision": 0.05, "max_time_s": 3},  // repeat until the median is known to 5 % or 3 s
 //   "report": {...},                             // settings for `caustics report` (scripts/report)
 //   "methods": {
-//     "caustic_triangles": {"grid": {"pow2": [32, 256]}},
-//     "caustic_mapping":   {"grid": [64, 128], "iterations": {"range": [1, 5, 1]},
-//                           "estimator": ["approx", "newton"]}
+//     "my_method":    {"grid": {"pow2": [32, 256]}},
+//     "other_method": {"grid": [64, 128], "iterations": {"range": [1, 5, 1]},
+//                     "estimator": ["approx", "newton"]}
 //   }
 // }
 //
@@ -40,6 +40,8 @@
 #include <vector>
 
 #include <nlohmann/json.hpp>
+
+#include <caustics/reference/reference.hpp>
 
 namespace caustics {
 
@@ -69,12 +71,7 @@ struct SweepSpec {
     std::string path;
     std::string description;
     std::vector<SweepScene> scenes;
-    std::uint64_t photons = 2'000'000;
-    std::uint64_t seed = 1;
-    double noise_target = 0.0;         // 0: a fixed photon count
-    std::uint64_t photon_cap = 2'000'000'000;
-    std::string sampler = "sobol";
-    int replicas = 8;
+    ReferenceSettings reference{.photons = 2'000'000};   // noise_target 0: a fixed photon count
     std::string truth = "auto";
     int warmup = 2;
     int repeats = 5;

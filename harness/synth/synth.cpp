@@ -1,5 +1,6 @@
 // Periodic caustic texture synthesis: see synth.hpp.
 #include <caustics/synth/synth.hpp>
+#include <caustics/util/build_info.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -315,7 +316,7 @@ SynthResult run_synth(const SynthOptions& options) {
                    {"note", "total_ms = sum over frames of update + render; the height-field evaluation (surface_ms), "
                             "one untimed warm-up frame and file writing are excluded"}};
     m["threads"] = ThreadLimit::effective();
-    m["build_type"] = CAUSTICS_BUILD_TYPE;
+    m["build_type"] = build_type();
     json h = json::object();
     for (const auto& [k, v] : total.counters) h[k] = v;
     m["health"] = h;

@@ -5,7 +5,7 @@
 // time i * period / frames, so frame `frames` equals frame 0 again.
 //
 // Any method may synthesise textures: one whose texture_capability(scene) says yes fills
-// CausticOutput::texture for a RenderRequest::texture (harness/method.hpp); no method is named here.
+// CausticOutput::texture for a RenderRequest::texture (harness/api/method.hpp); no method is named here.
 //
 // Files (all written atomically) in the output folder:
 //   frame_000.exr ...   linear E_c [W/m^2]; RGB when the method filled texture_rgb (dispersion)

@@ -3,7 +3,7 @@
 // shade each surface triangle's image with irradiance = (flux through the surface triangle) / (area of
 // its image). "The intensity is proportional to the area of the triangle" (ibid.), made radiometric:
 // flux = E0 * (triangle area projected perpendicular to the light) * transmittance * exp(-Ka d).
-// The raster (harness/raster.hpp, Area coverage) splits each triangle's flux exactly among the bins it
+// The raster (harness/blocks/raster/raster.hpp, Area coverage) splits each triangle's flux exactly among the bins it
 // covers, so nothing aliases, folded triangles (caustic fold-overs) still deposit their flux and
 // degenerate images deposit it without dividing by zero.
 // Dispersion (ibid., last paragraph): the image is rendered for several indices in

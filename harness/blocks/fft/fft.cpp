@@ -1,6 +1,8 @@
 // FFTW wrapper: see fft.hpp for the threading and alignment scheme.
 #include <caustics/blocks/fft/fft.hpp>
 
+#include <caustics/util/fftw_lock.hpp>
+
 #include <algorithm>
 #include <cstring>
 #include <mutex>
@@ -15,12 +17,6 @@
 namespace caustics {
 
 namespace {
-
-// The FFTW planner (plan creation and destruction) is not thread-safe; execution is.
-std::mutex& planner_mutex() {
-    static std::mutex m;
-    return m;
-}
 
 fftwf_complex* as_fftw(ComplexF* p) { return reinterpret_cast<fftwf_complex*>(p); }
 
@@ -139,7 +135,7 @@ Fft2D::Fft2D(int nx, int ny, FftRigor rigor) : nx_(nx), ny_(ny), plans_(std::mak
     const unsigned flags = (rigor == FftRigor::Measure ? FFTW_MEASURE : FFTW_ESTIMATE);
     const std::size_t total = static_cast<std::size_t>(nx) * ny;
     ComplexBuffer scratch(total);
-    std::lock_guard<std::mutex> lock(planner_mutex());
+    std::lock_guard<std::mutex> lock(fftw_planner_mutex());
     if (total < 16384) {
         plans_->whole[0] = fftwf_plan_dft_2d(ny, nx, as_fftw(scratch.data()), as_fftw(scratch.data()),
                                              FFTW_FORWARD, flags);
@@ -177,7 +173,7 @@ Fft2D::Fft2D(int nx, int ny, FftRigor rigor) : nx_(nx), ny_(ny), plans_(std::mak
 }
 
 Fft2D::~Fft2D() {
-    std::lock_guard<std::mutex> lock(planner_mutex());
+    std::lock_guard<std::mutex> lock(fftw_planner_mutex());
     for (int s = 0; s < 2; ++s) {
         destroy(plans_->whole[s]);
         destroy(plans_->rows.full[s]);

@@ -7,7 +7,7 @@
 //   Perspective (point light): eye at the light; (x0, x1) x (y0, y1) are extents on the tangent plane
 //     at unit distance (x / z, y / z), asymmetric frusta allowed; depth = z along forward (not radial).
 //
-// Pixel coordinates follow harness/raster.hpp: pixel (i, j) covers [i, i+1) x [j, j+1), row 0 is the
+// Pixel coordinates follow harness/blocks/raster/raster.hpp: pixel (i, j) covers [i, i+1) x [j, j+1), row 0 is the
 // top (largest y). A six-face cube map (Shah et al. 2007, Sec. III.F: point lights whose caustics leave
 // one frustum) is six 90-degree perspective faces (+x, -x, +y, -y, +z, -z) around the light.
 #include <array>

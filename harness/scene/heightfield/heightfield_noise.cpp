@@ -28,23 +28,13 @@
 #include <stdexcept>
 #include <vector>
 
+#include <caustics/util/fftw_lock.hpp>
+#include <caustics/util/rng.hpp>
 #include "detail/heightfield_generators.hpp"
 
 namespace caustics::detail {
 
 namespace {
-
-struct SplitMix64 {
-    std::uint64_t state;
-    std::uint64_t next() {
-        std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-        return z ^ (z >> 31);
-    }
-    // Uniform in (0, 1]: 53 random bits, never 0 (log-safe).
-    double uniform() { return (static_cast<double>(next() >> 11) + 1.0) * (1.0 / 9007199254740992.0); }
-};
 
 // The synthesised (time_samples x cells_y x cells_x) volume of heights (zero mean, RMS = amplitude) and
 // gradients, row-major with x fastest.
@@ -58,7 +48,6 @@ struct FftwDeleter {
     void operator()(T* p) const { fftwf_free(p); }
 };
 
-std::mutex g_fftw_mutex;  // FFTW's planner is not thread-safe
 
 std::shared_ptr<const NoiseVolume> synthesise(const HeightFieldDesc& d) {
     const int nx = d.resolution.x, ny = d.resolution.y, nt = std::max(1, d.time_samples);
@@ -75,7 +64,7 @@ std::shared_ptr<const NoiseVolume> synthesise(const HeightFieldDesc& d) {
 
     fftwf_plan forward, inverse;
     {
-        std::lock_guard<std::mutex> lock(g_fftw_mutex);
+        std::lock_guard<std::mutex> lock(fftw_planner_mutex());
         // FFTW_ESTIMATE: no timing-dependent planning, and the arrays are not overwritten while planning.
         forward = fftwf_plan_dft_r2c_3d(nt, ny, nx, real.get(), spectrum.get(), FFTW_ESTIMATE);
         inverse = fftwf_plan_dft_c2r_3d(nt, ny, nx, work.get(), real.get(), FFTW_ESTIMATE);
@@ -85,8 +74,8 @@ std::shared_ptr<const NoiseVolume> synthesise(const HeightFieldDesc& d) {
     // 3-D white noise.
     SplitMix64 rng{d.seed};
     for (std::size_t k = 0; k < n_real; k += 2) {
-        const double r = std::sqrt(-2.0 * std::log(rng.uniform()));
-        const double a = 2.0 * std::numbers::pi * rng.uniform();
+        const double r = std::sqrt(-2.0 * std::log(rng.uniform_nonzero()));
+        const double a = 2.0 * std::numbers::pi * rng.uniform_nonzero();
         real.get()[k] = static_cast<float>(r * std::cos(a));
         if (k + 1 < n_real) real.get()[k + 1] = static_cast<float>(r * std::sin(a));
     }
@@ -147,7 +136,7 @@ std::shared_ptr<const NoiseVolume> synthesise(const HeightFieldDesc& d) {
         out.assign(real.get(), real.get() + n_real);
     }
     {
-        std::lock_guard<std::mutex> lock(g_fftw_mutex);
+        std::lock_guard<std::mutex> lock(fftw_planner_mutex());
         fftwf_destroy_plan(forward);
         fftwf_destroy_plan(inverse);
     }

@@ -15,6 +15,7 @@
 #include <mutex>
 #include <vector>
 
+#include <caustics/util/rng.hpp>
 #include "detail/heightfield_generators.hpp"
 
 // No fused multiply-adds in this file (compilers contract by default on some targets, which would
@@ -44,31 +45,22 @@ double exp_neg(double x) {
     return sum;
 }
 
-std::uint64_t splitmix64(std::uint64_t& state) {
-    std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-}
-
-double uniform01(std::uint64_t& state) { return static_cast<double>(splitmix64(state) >> 11) * (1.0 / 9007199254740992.0); }
-
 struct Drop {
     double x = 0.0, y = 0.0;
     int frame = 0;
 };
 
 std::vector<Drop> seeded_drops(const HeightFieldDesc& d, double fps) {
-    std::uint64_t state = d.seed;
+    SplitMix64 rng{d.seed};
     const int half = std::max(1, static_cast<int>(std::floor(0.5 * d.animation_length * fps)));
     // Scalar arithmetic (not glm's templates, compiled outside the pragma above).
     const double lo_x = d.center.x - 0.5 * d.size.x, lo_y = d.center.y - 0.5 * d.size.y;
     std::vector<Drop> drops(static_cast<std::size_t>(std::max(0, d.drops)));
     for (std::size_t k = 0; k < drops.size(); ++k) {
         const double margin_x = std::min(d.drop_radius, 0.25 * d.size.x), margin_y = std::min(d.drop_radius, 0.25 * d.size.y);
-        drops[k].x = lo_x + margin_x + uniform01(state) * (d.size.x - 2.0 * margin_x);
-        drops[k].y = lo_y + margin_y + uniform01(state) * (d.size.y - 2.0 * margin_y);
-        const int f = std::min(half - 1, static_cast<int>(uniform01(state) * half));
+        drops[k].x = lo_x + margin_x + rng.uniform() * (d.size.x - 2.0 * margin_x);
+        drops[k].y = lo_y + margin_y + rng.uniform() * (d.size.y - 2.0 * margin_y);
+        const int f = std::min(half - 1, static_cast<int>(rng.uniform() * half));
         drops[k].frame = k == 0 ? 0 : f;
     }
     return drops;

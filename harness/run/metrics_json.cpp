@@ -1,0 +1,59 @@
+#include <caustics/run/metrics_json.hpp>
+
+#include <cmath>
+
+#include <caustics/run/resolved_method.hpp>
+#include <caustics/run/run_errors.hpp>
+#include <caustics/run/scene_frame.hpp>
+#include <caustics/run/thread_limit.hpp>
+#include <caustics/util/build_info.hpp>
+
+namespace caustics {
+
+using nlohmann::json;
+
+json json_number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+
+json timing_json(const TimingSummary* t) {
+    if (!t || t->samples == 0)
+        return {{"median", nullptr}, {"min", nullptr}, {"p90", nullptr}, {"stdev", nullptr}, {"iqr", nullptr}, {"ci_rel", nullptr}};
+    return {{"median", json_number(t->median)}, {"min", json_number(t->min)}, {"p90", json_number(t->p90)},
+            {"stdev", json_number(t->stdev)}, {"iqr", json_number(t->iqr)},
+            {"ci_rel", t->has_interval ? json_number(t->ci_rel) : json(nullptr)}};
+}
+
+// The metrics.json skeleton: every key of DESIGN.md section 7, values null until measured.
+json metrics_skeleton(const SceneFrame& sf, const ResolvedMethod& m, const RenderOptions& options) {
+    json j;
+    j["method"] = m.info->name;
+    j["scene"] = sf.scene().name;
+    j["frame"] = sf.geometry().frame;
+    j["params"] = params_json(*m.info, m.params);
+    j["radiometric"] = m.info->radiometric_at(m.params);
+    j["time_ms"] = timing_json(nullptr);
+    j["frame_ms"] = timing_json(nullptr);
+    j["frame_time"] = nullptr;
+    j["fps"] = nullptr;
+    j["render_fps"] = nullptr;
+    j["noisy_timing"] = nullptr;
+    j["prepare_ms"] = nullptr;
+    j["update_ms"] = nullptr;
+    j["stages_ms"] = json::object();
+    j["threads"] = ThreadLimit::effective();
+    j["error"] = {{"receiver", null_view_errors()}, {"camera", null_view_errors()}};
+    j["reference"] = {{"photons", nullptr}, {"noise_nrmse", nullptr}, {"cache_key", nullptr}};
+    j["truth"] = {{"kind", nullptr}, {"noise_nrmse", nullptr}};
+    j["baseline"] = {{"kind", nullptr}, {"error", nullptr}};
+    j["health"] = json::object();
+    j["status"] = nullptr;
+    j["build_type"] = build_type();
+    j["warmup"] = options.warmup;
+    j["repeats"] = options.repeats;
+    j["below_reference_noise"] = nullptr;
+    j["no_better_than_flat"] = nullptr;
+    j["claim"] = {{"inside", nullptr}, {"error_vs_baseline", nullptr}, {"reason", nullptr}, {"met", nullptr}};
+    j["message"] = "";
+    return j;
+}
+
+}  // namespace caustics
