@@ -20,6 +20,31 @@
 
 namespace caustics::test_support {
 
+// The catalog's small scene: a sine water patch (side `size` m, `cells` x `cells`) over a floor 0.4 m
+// below, lit straight down, a 16 x 16 receiver and the given camera. Each catalog file writes its own
+// copy, so that a regression that ignores --out writes into an obviously named folder rather than a
+// shipped scene's.
+inline nlohmann::json small_sine_scene(double size, int cells, const nlohmann::json& camera) {
+    nlohmann::json s = nlohmann::json::parse(R"({
+      "description": "catalog scene",
+      "lights": [{"type": "directional", "direction": [0, 0, -1], "irradiance": 1.0}],
+      "objects": [
+        {"name": "water", "shape": "heightfield", "center": [0, 0], "base_height": 0.0,
+         "material": {"type": "dielectric", "ior": 1.33},
+         "generator": {"type": "sine", "amplitude": 0.01, "wavelength": 0.25, "direction": [1, 0],
+                       "phase": 0, "speed": 0}},
+        {"name": "floor", "shape": "plane", "center": [0, 0, -0.4], "u": [1, 0, 0], "v": [0, 1, 0],
+         "material": {"type": "diffuse", "albedo": [0.8, 0.8, 0.8]}}
+      ],
+      "receiver": {"object": "floor", "resolution": [16, 16]},
+      "animation": {"frames": 1, "fps": 30}
+    })");
+    s["camera"] = camera;
+    s["objects"][0]["size"] = {size, size};
+    s["objects"][0]["resolution"] = {cells, cells};
+    return s;
+}
+
 // A folder of its own for one case, removed when the case ends (also when it fails: the catalog's
 // messages say what went wrong; nothing is left in /tmp).
 class CaseDir {

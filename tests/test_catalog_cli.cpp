@@ -30,25 +30,10 @@ struct CatalogCase {
     std::function<Probe(const CaseDir&)> make;
 };
 
-// A small scene of its own, so that a regression that ignores --out writes into an obviously named
-// results/ folder rather than a shipped scene's.
 std::string small_scene(const CaseDir& d) {
-    return d.write("catalog_scene.json", R"({
-      "description": "catalog scene",
-      "lights": [{"type": "directional", "direction": [0, 0, -1], "irradiance": 1.0}],
-      "camera": {"position": [0, -1.3, 1.4], "look_at": [0, 0, -0.4], "up": [0, 0, 1], "fov_y": 45,
-                 "width": 16, "height": 12},
-      "objects": [
-        {"name": "water", "shape": "heightfield", "center": [0, 0], "size": [2, 2], "resolution": [16, 16],
-         "base_height": 0.0, "material": {"type": "dielectric", "ior": 1.33},
-         "generator": {"type": "sine", "amplitude": 0.01, "wavelength": 0.25, "direction": [1, 0],
-                       "phase": 0, "speed": 0}},
-        {"name": "floor", "shape": "plane", "center": [0, 0, -0.4], "u": [1, 0, 0], "v": [0, 1, 0],
-         "material": {"type": "diffuse", "albedo": [0.8, 0.8, 0.8]}}
-      ],
-      "receiver": {"object": "floor", "resolution": [16, 16]},
-      "animation": {"frames": 1, "fps": 30}
-    })");
+    const nlohmann::json camera = {{"position", {0, -1.3, 1.4}}, {"look_at", {0, 0, -0.4}}, {"up", {0, 0, 1}},
+                                   {"fov_y", 45}, {"width", 16}, {"height", 12}};
+    return d.write("catalog_scene.json", caustics::test_support::small_sine_scene(2.0, 16, camera).dump(2));
 }
 
 // `base` with the options of `extra` appended; an option of `base` that `extra` gives again takes

@@ -59,22 +59,9 @@ private:
 // A small valid scene: sine water (object 0) over a floor receiver (object 1) 0.4 m down; its
 // reference of 20000 photons takes well under a second.
 json base_scene() {
-    return json::parse(R"({
-      "description": "catalog scene",
-      "lights": [{"type": "directional", "direction": [0, 0, -1], "irradiance": 1.0}],
-      "camera": {"position": [0, -0.6, -0.03], "look_at": [0, 0.05, -0.4], "up": [0, 0, 1], "fov_y": 55,
-                 "width": 32, "height": 24},
-      "objects": [
-        {"name": "water", "shape": "heightfield", "center": [0, 0], "size": [1.25, 1.25], "resolution": [32, 32],
-         "base_height": 0.0, "material": {"type": "dielectric", "ior": 1.33},
-         "generator": {"type": "sine", "amplitude": 0.01, "wavelength": 0.25, "direction": [1, 0],
-                       "phase": 0, "speed": 0}},
-        {"name": "floor", "shape": "plane", "center": [0, 0, -0.4], "u": [1, 0, 0], "v": [0, 1, 0],
-         "material": {"type": "diffuse", "albedo": [0.8, 0.8, 0.8]}}
-      ],
-      "receiver": {"object": "floor", "resolution": [16, 16]},
-      "animation": {"frames": 1, "fps": 30}
-    })");
+    const json camera = {{"position", {0, -0.6, -0.03}}, {"look_at", {0, 0.05, -0.4}}, {"up", {0, 0, 1}},
+                         {"fov_y", 55}, {"width", 32}, {"height", 24}};
+    return caustics::test_support::small_sine_scene(1.25, 32, camera);
 }
 
 json diffuse() { return {{"type", "diffuse"}}; }
