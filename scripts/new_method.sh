@@ -102,13 +102,14 @@ else
   parent="$root/methods"
 fi
 target="$parent/$name"
-class="$(echo "$name" | sed -E 's/(^|_)([a-z])/\U\2/g')Method"
+suite=$(echo "$name" | sed -E 's/(^|_)([a-z])/\U\2/g')   # my_method: MyMethod, its tests' suite name
+class="${suite}Method"
 
 # --- the files -----------------------------------------------------------------------------------------
 tmp=$(mktemp -d "$parent/.$name.XXXXXX")
 trap 'rm -rf "$tmp" "$tmp.cmake"' EXIT
-stamp() {   # stamp TEMPLATE DESTINATION: the template with NAME and the class name filled in
-  sed -e "s/@NAME@/$name/g" -e "s/@CLASS@/$class/g" "$template/$1" >"$tmp/$2"
+stamp() {   # stamp TEMPLATE DESTINATION: the template with the names filled in
+  sed -e "s/@NAME@/$name/g" -e "s/@CLASS@/$class/g" -e "s/@SUITE@/$suite/g" "$template/$1" >"$tmp/$2"
 }
 mkdir "$tmp/tests"
 echo "caustics_add_method($name)" >"$tmp/CMakeLists.txt"
@@ -151,5 +152,5 @@ if [ -n "$dir" ]; then
 else
   echo "next: cmake --build build/release, then"
   echo "  build/release/harness/cli/caustics render sine --method $name"
-  echo "  ctest --test-dir build/release -R '$class|Conformance.*$name'"
+  echo "  ctest --test-dir build/release -R '^$suite\\.|/${name}__'"
 fi

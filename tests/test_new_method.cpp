@@ -65,7 +65,7 @@ TEST(NewMethod, StampsAStandaloneProject) {
     const std::string readme = slurp(method / "README.md");
     for (const std::string* text : {&source, &test, &readme}) {
         EXPECT_FALSE(text->empty());
-        EXPECT_FALSE(contains(*text, "@NAME@") || contains(*text, "@CLASS@")) << "a placeholder is left";
+        EXPECT_FALSE(contains(*text, "@NAME@") || contains(*text, "@CLASS@") || contains(*text, "@SUITE@")) << "a placeholder is left";
     }
     EXPECT_TRUE(contains(source, "info.name = \"scaffold_probe\";"));
     EXPECT_TRUE(contains(source, "namespace scaffold_probe {"));
@@ -75,7 +75,7 @@ TEST(NewMethod, StampsAStandaloneProject) {
                              "update(", "render(", "accuracy_claim(", "info.radiometric = true", "health.add("})
         EXPECT_TRUE(contains(source, part)) << part;
     EXPECT_TRUE(contains(test, "constexpr const char* kMethod = \"scaffold_probe\";"));
-    EXPECT_TRUE(contains(test, "TEST(ScaffoldProbeMethod, ReceiverCarriesTheBaselineFlux)"));
+    EXPECT_TRUE(contains(test, "TEST(ScaffoldProbe, ReceiverCarriesTheBaselineFlux)"));
     for (const char* heading : {"# scaffold_probe", "## Paper", "## Equations followed", "## Parameters",
                                 "## Regime of validity", "## Departures from the paper and the settings that restore it",
                                 "## Measured speed and error", "## Health counters"})
