@@ -89,7 +89,7 @@ if [ -n "$program" ] && command -v python3 >/dev/null; then
   registered=$("$program" list --json 2>/dev/null |
     python3 -c 'import json, sys; print(" ".join(m["name"] for m in json.load(sys.stdin)["methods"]))' 2>/dev/null || true)
   [[ " $registered " != *" $name "* ]] ||
-    fail "NAME '$name': $program already registers a method of that name; choose another name"
+    fail "NAME '$name': $program already registers a method of that name (rebuild it if its folder was removed); choose another name"
 fi
 
 # --- where ---------------------------------------------------------------------------------------------
