@@ -308,6 +308,7 @@ TEST_F(CliTest, ListJsonDocumentsEveryParameter) {
             EXPECT_TRUE(p.contains("default") && !p["default"].is_null());
             EXPECT_TRUE(p["doc"].is_string() && !p["doc"].get<std::string>().empty());
             EXPECT_TRUE(p["valid"].is_string());
+            EXPECT_TRUE(p["sweep"].is_array());   // the values "methods": "all" runs; empty: the default
             grid |= p["name"] == "grid";
             iterations |= p["name"] == "iterations";
         }

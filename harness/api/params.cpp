@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdlib>
 
+#include <nlohmann/json.hpp>
+
 #include <caustics/util/errors.hpp>
 
 namespace caustics {
@@ -137,6 +139,17 @@ long long ParamSet::get_int(const std::string& name) const { return std::stoll(r
 double ParamSet::get_float(const std::string& name) const { return std::stod(raw(name, ParamType::Float)); }
 const std::string& ParamSet::get_enum(const std::string& name) const { return raw(name, ParamType::Enum); }
 bool ParamSet::get_bool(const std::string& name) const { return raw(name, ParamType::Bool) == "true"; }
+
+nlohmann::json param_json(const std::string& owner, const ParamSpec& spec, const std::string& text) {
+    const std::string canonical_text = canonical(owner, spec, text);
+    switch (spec.type) {
+    case ParamType::Int: return std::stoll(canonical_text);
+    case ParamType::Float: return std::stod(canonical_text);
+    case ParamType::Bool: return canonical_text == "true";
+    case ParamType::Enum: break;
+    }
+    return canonical_text;
+}
 
 std::pair<std::string, std::string> parse_assignment(const std::string& text, const std::string& option) {
     auto eq = text.find('=');

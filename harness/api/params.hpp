@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json_fwd.hpp>
+
 namespace caustics {
 
 enum class ParamType { Int, Float, Enum, Bool };
@@ -19,6 +21,9 @@ struct ParamSpec {
     double max = std::numeric_limits<double>::infinity();
     std::vector<std::string> choices;   // Enum: valid values
     std::string doc;
+    // The values a sweep of every method ("methods": "all" in a sweep spec) runs this parameter at, as
+    // text: a quick survey of its effect. Empty: such a sweep keeps the default.
+    std::vector<std::string> sweep = {};   // (initialised so that tables may leave it out)
 
     std::string valid_text() const;    // "integer in [1, 4096]", "one of approx|newton", ...
 };
@@ -45,6 +50,10 @@ private:
     std::map<std::string, std::string> values_;
     std::map<std::string, ParamType> types_;
 };
+
+// A value of `spec` as the JSON value of its type (integer, number, boolean or string), checked and
+// canonicalised as ParamSet::resolve does; throws InputError naming `owner` and the key otherwise.
+nlohmann::json param_json(const std::string& owner, const ParamSpec& spec, const std::string& text);
 
 // Parses "key=value" (from --set); throws InputError naming `option` when there is no '='.
 std::pair<std::string, std::string> parse_assignment(const std::string& text, const std::string& option);

@@ -19,19 +19,6 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-json typed_value(const ParamSpec& spec, const std::string& text) {
-    try {
-        switch (spec.type) {
-        case ParamType::Int: return std::stoll(text);
-        case ParamType::Float: return json_number(std::stod(text));
-        case ParamType::Bool: return text == "true" || text == "1" || text == "on" || text == "yes";
-        case ParamType::Enum: return text;
-        }
-    } catch (const std::exception&) {
-    }
-    return text;
-}
-
 json methods_json() {
     json methods = json::array();
     for (const MethodInfo* info : registered_methods()) {
@@ -40,7 +27,7 @@ json methods_json() {
             json j;
             j["name"] = p.name;
             j["type"] = to_string(p.type);
-            j["default"] = typed_value(p, p.default_value);
+            j["default"] = param_json(info->name, p, p.default_value);
             j["valid"] = p.valid_text();
             if (p.type == ParamType::Int || p.type == ParamType::Float) {
                 j["min"] = json_number(p.min);   // null: unbounded
@@ -48,6 +35,9 @@ json methods_json() {
             }
             if (p.type == ParamType::Enum) j["choices"] = p.choices;
             j["doc"] = p.doc;
+            // What "methods": "all" in a sweep spec runs (the default alone where empty).
+            j["sweep"] = json::array();
+            for (const std::string& v : p.sweep) j["sweep"].push_back(param_json(info->name, p, v));
             params.push_back(j);
         }
         methods.push_back({{"name", info->name}, {"doc", info->doc}, {"radiometric", info->radiometric},
@@ -92,6 +82,11 @@ void print_text(const json& methods, const json& scenes) {
                           (p["default"].is_string() ? p["default"].get<std::string>() : p["default"].dump()).c_str(),
                           p["valid"].get<std::string>().c_str());
             std::cout << line << "\n        " << p["doc"].get<std::string>() << "\n";
+            if (!p["sweep"].empty()) {
+                std::string values;
+                for (const json& v : p["sweep"]) values += (values.empty() ? "" : ", ") + (v.is_string() ? v.get<std::string>() : v.dump());
+                std::cout << "        swept at " << values << " where a sweep spec says \"methods\": \"all\"\n";
+            }
         }
     }
     std::cout << "\nScenes (" << scenes_directory() << "):\n";
@@ -110,7 +105,7 @@ Command make_list_command() {
     c.order = 10;
     c.setup = [](CLI::App& app) -> std::function<int()> {
         auto as_json = std::make_shared<bool>(false);
-        app.add_flag("--json", *as_json, "Print JSON: {methods: [{name, doc, radiometric, params: [...]}], scenes: [...]}");
+        app.add_flag("--json", *as_json, "Print JSON: {methods: [{name, doc, radiometric, params: [{name, type, default, valid, doc, sweep, ...}]}], scenes: [...]}");
         return [as_json]() {
             const json methods = methods_json();
             const json scenes = scenes_json();

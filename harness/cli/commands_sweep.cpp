@@ -1,6 +1,7 @@
-// caustics sweep SPEC [--out DIR] [--resume] [--axis METHOD.AXIS=VALUES]... [--yes] [--threads T]
+// caustics sweep SPEC [--out DIR] [--resume] [--axis METHOD.AXIS=VALUES]... [--yes] [--threads T] [--dry-run]
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <memory>
 
 #include "command.hpp"
@@ -21,6 +22,22 @@ int run_sweep_command(SweepOptions o) {
     return 0;
 }
 
+// --dry-run: the plan (the spec with --axis applied), one run id a line and the count per method; nothing
+// is run or written, so a spec can be checked (and "methods": "all" seen expanded) before a long sweep.
+int list_planned_runs(const SweepOptions& o) {
+    const std::vector<PlannedRun> runs = plan_runs(load_sweep_spec(o.spec_path, o.axis_overrides));
+    std::map<std::string, std::size_t> per_method;
+    for (const PlannedRun& run : runs) {
+        std::cout << run.id << "\n";
+        ++per_method[run.method];
+    }
+    std::cout << "sweep: " << runs.size() << " runs planned (";
+    for (auto it = per_method.begin(); it != per_method.end(); ++it)
+        std::cout << (it == per_method.begin() ? "" : ", ") << it->first << " " << it->second;
+    std::cout << "); dry run: nothing run or written\n";
+    return 0;
+}
+
 Command make_sweep_command() {
     Command c;
     c.name = "sweep";
@@ -28,6 +45,7 @@ Command make_sweep_command() {
     c.order = 40;
     c.setup = [](CLI::App& app) -> std::function<int()> {
         auto o = std::make_shared<SweepOptions>();
+        auto dry_run = std::make_shared<bool>(false);
         add_input_file_argument(app, "spec", o->spec_path, "Sweep spec (JSON), e.g. scripts/sweeps/quick.json",
                                 "a sweep spec (JSON), e.g. scripts/sweeps/quick.json")
             ->required();
@@ -42,7 +60,8 @@ Command make_sweep_command() {
         add_number_option(app, "--timeout", o->timeout_s, 0.0, 604800.0,
                           "Per-run time limit in seconds (default: the spec's timing.timeout_s)",
                           "0: the spec's timing.timeout_s, 604800 s: a week");
-        return [o]() { return run_sweep_command(*o); };
+        app.add_flag("--dry-run", *dry_run, "List the planned runs and their count per method; run and write nothing");
+        return [o, dry_run]() { return *dry_run ? list_planned_runs(*o) : run_sweep_command(*o); };
     };
     return c;
 }

@@ -249,6 +249,24 @@ AxisGenerator read_generator(const json& value, const std::string& file, const s
     return g;
 }
 
+// "methods": "all": every registered method, with an axis for each parameter whose table declares sweep
+// values (ParamSpec::sweep); a method that declares none runs once, at its defaults.
+json every_method_axes(const std::string& file) {
+    json methods = json::object();
+    for (const MethodInfo* info : registered_methods()) {
+        json axes = json::object();
+        for (const ParamSpec& p : info->params) {
+            if (p.sweep.empty()) continue;
+            json values = json::array();
+            for (const std::string& v : p.sweep) values.push_back(param_json(info->name, p, v));
+            axes[p.name] = values;
+        }
+        methods[info->name] = axes;
+    }
+    if (methods.empty()) throw InputError(file, "methods", "\"all\" names no method: none is registered in this program");
+    return methods;
+}
+
 }  // namespace
 
 std::uint64_t axis_value_count(const json& value, const std::string& file, const std::string& key) {
@@ -289,6 +307,14 @@ SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string
         return v.get<std::string>();
     };
 
+    // "all" is expanded first, so that --axis, the checks below and the manifest's spec as run see every
+    // method's axes as if they were written out.
+    if (root.contains("methods") && !root["methods"].is_object()) {
+        if (root["methods"] != "all")
+            throw InputError(path, "methods", "must be \"all\" (every registered method at the sweep values its "
+                                              "parameter table declares) or an object {method: {axis: values}}");
+        root["methods"] = every_method_axes(path);
+    }
     // Command-line axes replace or add axes before validation, so they are checked like the file.
     std::set<std::string> overridden;
     for (const auto& text : axis_overrides) {
@@ -390,7 +416,7 @@ SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string
         }
     }
     if (!root.contains("methods") || !root["methods"].is_object() || root["methods"].empty())
-        throw InputError(path, "methods", "must be a non-empty object {method: {axis: values}}");
+        throw InputError(path, "methods", "must be \"all\" or a non-empty object {method: {axis: values}}");
     // First the size, by arithmetic on the axes: a sweep too large to plan is refused before any axis
     // is expanded.
     const auto find_param = [&](const MethodInfo& info, const std::string& name, const std::string& axis) {

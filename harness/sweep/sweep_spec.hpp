@@ -20,6 +20,9 @@
 //     "other_method": {"grid": [64, 128], "iterations": {"range": [1, 5, 1]},
 //                     "estimator": ["approx", "newton"]}
 //   }
+//   or "methods": "all"                          // every registered method, each parameter at the sweep
+//                                                // values its table declares (ParamSpec::sweep), the
+//                                                // others at their defaults; --axis still overrides
 // }
 //
 // Axis values: a list of scalars; {"range": [start, stop, step]} (stop included when reached);

@@ -56,14 +56,16 @@ MethodInfo caustic_mapping_info() {
         "parts of dielectrics.";
     info.radiometric = true;
     info.params = {
-        {"grid", ParamType::Int, "128", 2, 4096, {}, "refractive vertex grid: specular positions/normals texture resolution (grid x grid)"},
-        {"iterations", ParamType::Int, "3", 1, 1000, {}, "estimator iterations (updates of the distance d) per ray"},
+        {"grid", ParamType::Int, "128", 2, 4096, {}, "refractive vertex grid: specular positions/normals texture resolution (grid x grid)",
+         {"64", "128"}},
+        {"iterations", ParamType::Int, "3", 1, 1000, {}, "estimator iterations (updates of the distance d) per ray", {"1", "3"}},
         {"map", ParamType::Int, "0", 0, 8192, {},
          "caustic-map and receiver positions texture resolution (map x map per face); 0: auto, 6 x grid, at least "
          "768 (the paper-era default, used up to grid 128) and at most 4096"},
         {"estimator", ParamType::Enum, "newton", 0, 0, {"approx", "newton"},
          "approx: d <- |lookup(v + d r) - v| (Sec. III.C-D); newton: Newton-Raphson with a forward difference "
-         "(appendix; converges for oblique rays where approx at 3 iterations does not)"},
+         "(appendix; converges for oblique rays where approx at 3 iterations does not)",
+         {"approx", "newton"}},
         {"d0", ParamType::Float, "0", 0.0, 1e6, {},
          "initial distance along the ray [m]; 0: start at the vertex (first lookup on its own light ray); paper: 1"},
         {"eps", ParamType::Float, "0.01", 1e-9, 10.0, {}, "Newton forward-difference step [m] (paper: 0.1)"},

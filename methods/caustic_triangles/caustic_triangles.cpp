@@ -295,7 +295,7 @@ MethodInfo caustic_triangles_info() {
     info.radiometric = true;
     info.params = {
         {"grid", ParamType::Int, "256", 2, 4096, {},
-         "surface grid resolution (vertices per side) the water surface is resampled at"},
+         "surface grid resolution (vertices per side) the water surface is resampled at", {"64", "128", "256"}},
         {"iterations", ParamType::Int, "1", 1, 1, {}, "no meaning for this single-pass method; only 1 is valid"},
         {"dispersion_samples", ParamType::Int, "8", 2, 64, {},
          "indices (wavelengths) rendered in [ior, ior+dispersion] when the material has dispersion"},

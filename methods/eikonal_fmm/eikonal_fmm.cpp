@@ -295,12 +295,14 @@ MethodInfo eikonal_fmm_info() {
         {"grid", ParamType::Int, "128", 4, 1024, {},
          "3-D texture: cells along the longer horizontal side of the receivers' footprint (init_time=plane_wave; "
          "the volume reaches up the refracted rays to where their light enters) or of the water volume "
-         "(init_time=paper); z at the same spacing"},
+         "(init_time=paper); z at the same spacing",
+         {"32", "64", "128"}},
         {"iterations", ParamType::Int, "0", 0, 10000, {},
          "viscosity post-process (Sec. 3.3): xy dissipation steps per layer below threshold_height; 0 = off"},
         {"solver", ParamType::Enum, "fmm", 0, 0, {"fmm", "sweep"},
          "fmm: fast marching with a binary heap (Sethian 1996); sweep: downward layer-by-layer fast "
-         "sweeping, O(N), exact for fronts that move down"},
+         "sweeping, O(N), exact for fronts that move down",
+         {"fmm", "sweep"}},
         {"order", ParamType::Int, "2", 1, 2, {},
          "upwind difference order: 1 (paper) or 2 (Rickett & Fomel 2000 one-sided 3-point differences)"},
         {"init", ParamType::Enum, "triangle", 0, 0, {"vertex", "triangle"},

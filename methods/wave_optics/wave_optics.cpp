@@ -68,7 +68,8 @@ const char* kDoc =
 std::vector<ParamSpec> param_table() {
     std::vector<ParamSpec> p;
     p.push_back({"grid", ParamType::Int, "512", 16, 4096, {},
-                 "FFT size (grid x grid) the surface period is resampled to; a product of 2, 3, 5, 7"});
+                 "FFT size (grid x grid) the surface period is resampled to; a product of 2, 3, 5, 7",
+                 {"256", "512"}});
     p.push_back({"iterations", ParamType::Int, "1", 1, 1, {}, "no meaning for this method: only 1 is valid"});
     p.push_back({"wavelength", ParamType::Float, "0", 0.0, 1e3, {},
                  "wavelength in the water [m]; 0 = auto (two grid spacings); at least two grid spacings"});

@@ -412,7 +412,8 @@ MethodInfo wave_pde_info() {
     info.params = {
         {"grid", ParamType::Int, "128", 4, 1024, {},
          "3-D texture: cells along the longer horizontal side of the water volume; z at the same spacing "
-         "(the damping band adds `sponge` cells on every side)"},
+         "(the damping band adds `sponge` cells on every side)",
+         {"32", "64", "128"}},
         {"iterations", ParamType::Int, "0", 0, 1000000, {},
          "time steps of the wave simulation; 0 = until the `stop` rule holds"},
         {"stop", ParamType::Enum, "arrival", 0, 0, {"arrival", "epsilon"},
