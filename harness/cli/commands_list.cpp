@@ -12,6 +12,7 @@
 #include "command.hpp"
 #include <caustics/api/registry.hpp>
 #include <caustics/run/render_run.hpp>
+#include <caustics/scene/scene_catalog.hpp>
 
 namespace caustics::cli {
 namespace {
@@ -94,7 +95,7 @@ void print_text(const json& methods, const json& scenes) {
             std::cout << line << "\n        " << p["doc"].get<std::string>() << "\n";
         }
     }
-    std::cout << "\nScenes (" << scenes_directory() << "):\n";
+    std::cout << "\nScenes (" << scenes_directory().string() << "):\n";
     for (const json& s : scenes) {
         char line[512];
         std::snprintf(line, sizeof line, "  %-12s %s", s["name"].get<std::string>().c_str(),

@@ -48,15 +48,6 @@ struct RenderOptions {
     bool progress = true;                           // reference progress bar on stderr
 };
 
-// A scene argument: an existing path as is, else a name in the scenes folder ("pool" ->
-// scenes/pool.json). Throws InputError (exit 2) for an empty argument, a symbolic link loop, and a path
-// or name that is neither, listing the scene names.
-std::string resolve_scene_path(const std::string& arg);
-// The scenes folder: ./scenes when it exists, else the source tree's scenes/.
-std::string scenes_directory();
-// The names of the scene files in the scenes folder ("pool" for scenes/pool.json), sorted.
-std::vector<std::string> scene_names();
-
 // Everything about one (scene, frame) that does not depend on the method. Neither copyable nor
 // movable: the frame geometry, tracer and chart point into it.
 class SceneFrame {
