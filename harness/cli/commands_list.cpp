@@ -52,7 +52,7 @@ json methods_json() {
             params.push_back(j);
         }
         methods.push_back({{"name", info->name}, {"doc", info->doc}, {"radiometric", info->radiometric},
-                           {"params", params}});
+                           {"params", params}, {"origin", method_origin(info->name)}});
     }
     return methods;
 }
@@ -85,7 +85,8 @@ void print_text(const json& methods, const json& scenes) {
     for (const json& m : methods) {
         std::cout << "\n  " << m["name"].get<std::string>()
                   << (m["radiometric"].get<bool>() ? "  [radiometric]" : "  [relative values: errors after a scale fit]")
-                  << "\n    " << m["doc"].get<std::string>() << "\n";
+                  << "\n    " << m["doc"].get<std::string>() << "\n    registered by "
+                  << m["origin"].get<std::string>() << "\n";
         for (const json& p : m["params"]) {
             char line[512];
             std::snprintf(line, sizeof line, "    --set %-18s %-5s default %-10s %s", p["name"].get<std::string>().c_str(),
