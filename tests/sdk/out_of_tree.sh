@@ -6,10 +6,10 @@
 # not a plugin, one built against another version, a second library registering the same name, a plugin
 # taking a built-in method's name, and a plugin folder that does not exist.
 #
-#   out_of_tree.sh PREFIX SOURCE_DIR
+#   out_of_tree.sh SOURCE_DIR      (the installation: $CAUSTICS_SDK_PREFIX, tests/sdk/CMakeLists.txt)
 set -euo pipefail
-prefix=$1
-source_dir=$2
+prefix=${CAUSTICS_SDK_PREFIX:?the installed prefix}
+source_dir=$1
 source "$source_dir/tests/sdk/sdk.sh"
 
 work=$(mktemp -d "${TMPDIR:-/tmp}/caustics_out_of_tree.XXXXXX")
@@ -49,14 +49,14 @@ version=$(/usr/bin/python3 -c 'import json, sys; print(json.load(open(sys.argv[1
     "$prefix/share/caustics/build.json")
 builtin=$("$caustics" list --json | /usr/bin/python3 -c 'import json, sys; print(json.load(sys.stdin)["methods"][0]["name"])')
 compile_plugin() {   # OUT NAME VERSION: a plugin of one method NAME, built by hand as caustics_add_method() would
-    ${CAUSTICS_SDK_LAUNCHER:-} c++ -std=c++20 -shared -fPIC -fvisibility=hidden -DCAUSTICS_PLUGIN -DGLM_FORCE_XYZW_ONLY \
+    ${CAUSTICS_SDK_LAUNCHER:-} "${CAUSTICS_SDK_CXX:-c++}" -std=c++20 -shared -fPIC -fvisibility=hidden -DCAUSTICS_PLUGIN -DGLM_FORCE_XYZW_ONLY \
         -DCAUSTICS_SDK_VERSION="\"$3\"" -DMETHOD_NAME="\"$2\"" -I"$prefix/include" "$work/method.cpp" \
         "$prefix/lib/cmake/caustics/caustics_plugin_entry.cpp" -o "$1"
 }
 mkdir -p "$work/broken" "$work/not_plugin" "$work/old" "$work/twin" "$work/clash"
 echo "not a library" >"$work/broken/broken.so"
 echo 'extern "C" int some_function() { return 0; }' >"$work/not_plugin.cpp"
-c++ -shared -fPIC "$work/not_plugin.cpp" -o "$work/not_plugin/libsomething.so"
+"${CAUSTICS_SDK_CXX:-c++}" -shared -fPIC "$work/not_plugin.cpp" -o "$work/not_plugin/libsomething.so"
 cat >"$work/method.cpp" <<CPP
 #include <memory>
 #include <caustics/api/registry.hpp>

@@ -9,7 +9,8 @@
 #   sdk_expect_refusal WHAT TEXT CMD...  CMD exits 2 with one "caustics: error:" line matching *TEXT* (a
 #                                        glob pattern)
 #
-# CAUSTICS_SDK_LAUNCHER (e.g. ccache) is passed to the method's build as its compiler launcher.
+# CAUSTICS_SDK_CXX (default c++) is the compiler of the method's build, CAUSTICS_SDK_LAUNCHER (e.g.
+# ccache) its compiler launcher.
 set -euo pipefail
 
 sdk_fail() {
@@ -34,7 +35,7 @@ sdk_build_method() {
     local launcher=()
     [[ -n ${CAUSTICS_SDK_LAUNCHER:-} ]] && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER="$CAUSTICS_SDK_LAUNCHER")
     cmake -S "$source" -B "$out" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$prefix" \
-        "${launcher[@]}" >"$out.configure.log" 2>&1 || { cat "$out.configure.log" >&2; sdk_fail "configure $source"; }
+        -DCMAKE_CXX_COMPILER="${CAUSTICS_SDK_CXX:-c++}" "${launcher[@]}" >"$out.configure.log" 2>&1 || { cat "$out.configure.log" >&2; sdk_fail "configure $source"; }
     cmake --build "$out" -j2 || sdk_fail "build $source against $prefix"
     ctest --test-dir "$out" --output-on-failure || sdk_fail "the tests of $source"
 }
