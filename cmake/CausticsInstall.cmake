@@ -15,7 +15,7 @@
 #                                     (every layer), caustics::testing (framework + test helpers),
 #                                     caustics::caustics (the program), and caustics_add_method()
 #   share/caustics/                   scenes/, scripts/report/, scripts/sweeps/, build.json (version, and
-#                                     the git commit when configured)
+#                                     the git commit of the last build)
 include(CMakePackageConfigHelpers)
 
 set(CAUSTICS_BUILD_DATA_DIR ${PROJECT_BINARY_DIR}/share/caustics)
@@ -35,15 +35,11 @@ caustics_json_string(source_json "${PROJECT_SOURCE_DIR}")
 file(CONFIGURE OUTPUT ${CAUSTICS_BUILD_DATA_DIR}/build.json
      CONTENT "{\"version\": ${version_json}, \"source_dir\": ${source_json}}\n")
 
-find_package(Git QUIET)
-set(configured_commit "")
-if(GIT_EXECUTABLE)
-  execute_process(COMMAND ${GIT_EXECUTABLE} -C ${PROJECT_SOURCE_DIR} rev-parse --short=12 HEAD
-                  OUTPUT_VARIABLE configured_commit OUTPUT_STRIP_TRAILING_WHITESPACE ERROR_QUIET)
-endif()
-caustics_json_string(commit_json "${configured_commit}")
-file(CONFIGURE OUTPUT ${PROJECT_BINARY_DIR}/package/build.json
-     CONTENT "{\"version\": ${version_json}, \"git_commit\": ${commit_json}}\n")
+# An installation cannot ask git: its build.json records the commit of the last build.
+add_custom_target(caustics_build_info ALL
+                  COMMAND ${CMAKE_COMMAND} -DSOURCE=${PROJECT_SOURCE_DIR} -DVERSION=${PROJECT_VERSION}
+                          -DOUT=${PROJECT_BINARY_DIR}/package/build.json -P ${PROJECT_SOURCE_DIR}/cmake/CausticsBuildInfo.cmake
+                  BYPRODUCTS ${PROJECT_BINARY_DIR}/package/build.json VERBATIM)
 
 # The test helpers, as a target: in the build as tests/, installed as include/caustics/testing/.
 add_library(caustics_testing INTERFACE)

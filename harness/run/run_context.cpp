@@ -44,7 +44,7 @@ std::string trimmed_output(const std::string& command) {
 }
 
 // The commit the program was built from, and how that is known: a build tree asks its source tree's git
-// (build.json names the source folder), an installation records the commit its build was configured at.
+// (build.json names the source folder), an installation records the commit of its last build.
 std::pair<std::string, std::string> git_commit() {
     const nlohmann::json build = build_description();
     if (build.contains("source_dir") && build["source_dir"].is_string()) {
@@ -55,7 +55,7 @@ std::pair<std::string, std::string> git_commit() {
         return {out.empty() ? "unknown" : out, "source tree"};
     }
     if (build.contains("git_commit") && build["git_commit"].is_string() && !build["git_commit"].get<std::string>().empty())
-        return {build["git_commit"].get<std::string>(), "configure time"};
+        return {build["git_commit"].get<std::string>(), "build time"};
     return {"unknown", "unknown"};
 }
 

@@ -17,8 +17,8 @@ namespace caustics {
 // when it is unset and no share/caustics with scenes/ is found, naming where it looked.
 std::filesystem::path data_directory();
 
-// data_directory()/build.json: {"version", and "source_dir" in a build tree or "git_commit" (as
-// configured) in an installation}. An empty object when the file or the data folder is missing.
+// data_directory()/build.json: {"version", and "source_dir" in a build tree or "git_commit" (at the
+// last build) in an installation}. An empty object when the file or the data folder is missing.
 nlohmann::json build_description();
 
 }  // namespace caustics
