@@ -1,5 +1,6 @@
 # caustics_add_gtest(SOURCE [LIBRARIES...]): one GoogleTest program per test file, every case
-# discovered by ctest. The program links the whole framework and the shared test helpers; tests that
+# discovered by ctest. The program links the whole framework and the shared test helpers
+# (caustics_testing, cmake/CausticsInstall.cmake); tests that
 # start the `caustics` program find it through CAUSTICS_BINARY, and test data through
 # CAUSTICS_SOURCE_DIR (tests run from the source tree).
 #
@@ -17,7 +18,7 @@ endif()
 function(caustics_add_gtest source)
   get_filename_component(name ${source} NAME_WE)
   add_executable(${name} ${source})
-  target_link_libraries(${name} PRIVATE ${ARGN} caustics_framework caustics_test_support GTest::gtest_main)
+  target_link_libraries(${name} PRIVATE ${ARGN} caustics_testing GTest::gtest_main)
   target_compile_definitions(${name} PRIVATE CAUSTICS_BINARY="$<TARGET_FILE:caustics>"
                              CAUSTICS_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
   add_dependencies(${name} caustics)

@@ -83,7 +83,7 @@ done
 if grep -rqsE "namespace (caustics::)?$name( |\{|$)" --include='*.hpp' --include='*.cpp' "$root/harness" "$root/methods"; then
   fail "NAME '$name': the namespace caustics::$name is already used in $root; choose another name"
 fi
-program="${CAUSTICS_BIN:-$root/build/release/harness/cli/caustics}"
+program="${CAUSTICS_BIN:-$root/build/release/bin/caustics}"
 [ -x "$program" ] || program=$(command -v caustics || true)
 if [ -n "$program" ] && command -v python3 >/dev/null; then
   registered=$("$program" list --json 2>/dev/null |
@@ -151,6 +151,6 @@ if [ -n "$dir" ]; then
   echo "  cmake -S $parent -B $parent/build -DCMAKE_PREFIX_PATH=<prefix> && cmake --build $parent/build && ctest --test-dir $parent/build"
 else
   echo "next: cmake --build build/release, then"
-  echo "  build/release/harness/cli/caustics render sine --method $name"
+  echo "  build/release/bin/caustics render sine --method $name"
   echo "  ctest --test-dir build/release -R '^$suite\\.|/${name}__'"
 fi

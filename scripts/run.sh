@@ -20,7 +20,7 @@ spec=${1:-scripts/sweeps/quick.json}
 [ $# -gt 0 ] && shift
 out=${OUT:-results/sweeps/$(basename "$spec" .json)-$(date +%Y%m%d-%H%M%S)}
 export CAUSTICS_CACHE_DIR="${CAUSTICS_CACHE_DIR:-$PWD/results/cache}"
-bin=build/release/harness/cli/caustics
+bin=build/release/bin/caustics
 
 "$bin" sweep "$spec" --out "$out" --threads "${THREADS:-0}" "$@" >&2
 "$bin" report "$out"

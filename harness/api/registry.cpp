@@ -1,6 +1,5 @@
 #include <caustics/api/registry.hpp>
 
-#include <algorithm>
 #include <map>
 #include <memory>
 
@@ -9,30 +8,59 @@
 namespace caustics {
 namespace {
 
-// Function-local static: registration runs during static initialisation of the method objects, whose
+struct Entry {
+    std::unique_ptr<MethodInfo> info;
+    std::string origin;
+};
+
+// Function-local statics: registration runs during static initialisation of the method objects, whose
 // order relative to this file is unspecified.
-std::map<std::string, std::unique_ptr<MethodInfo>>& table() {
-    static std::map<std::string, std::unique_ptr<MethodInfo>> methods;
+std::map<std::string, Entry>& table() {
+    static std::map<std::string, Entry> methods;
     return methods;
+}
+
+std::vector<std::string>& conflicts() {
+    static std::vector<std::string> messages;
+    return messages;
 }
 
 }  // namespace
 
-MethodRegistrar::MethodRegistrar(MethodInfo (*make)()) {
+void add_method(MethodFactory make, const std::string& origin) {
     auto info = std::make_unique<MethodInfo>(make());
-    std::string name = info->name;
-    table()[name] = std::move(info);
+    const std::string name = info->name;
+    if (auto it = table().find(name); it != table().end())
+        throw InputError(origin, name,
+                         "a method of this name is already registered by " + it->second.origin +
+                             "; method names must be unique: rename one of them");
+    table()[name] = Entry{std::move(info), origin};
 }
+
+MethodRegistrar::MethodRegistrar(MethodFactory make, const char* origin) {
+    try {
+        add_method(make, origin);
+    } catch (const InputError& e) {
+        conflicts().push_back(e.what());
+    }
+}
+
+std::vector<std::string> registration_conflicts() { return conflicts(); }
 
 std::vector<const MethodInfo*> registered_methods() {
     std::vector<const MethodInfo*> out;
-    for (const auto& [name, info] : table()) out.push_back(info.get());
+    for (const auto& [name, entry] : table()) out.push_back(entry.info.get());
     return out;
 }
 
 const MethodInfo* find_method(const std::string& name) {
     auto it = table().find(name);
-    return it == table().end() ? nullptr : it->second.get();
+    return it == table().end() ? nullptr : it->second.info.get();
+}
+
+std::string method_origin(const std::string& name) {
+    auto it = table().find(name);
+    return it == table().end() ? std::string() : it->second.origin;
 }
 
 const MethodInfo& require_method(const std::string& name, const std::string& option) {

@@ -12,6 +12,7 @@
 #include "command.hpp"
 #include <caustics/api/registry.hpp>
 #include <caustics/run/render_run.hpp>
+#include <caustics/scene/scene_catalog.hpp>
 
 namespace caustics::cli {
 namespace {
@@ -41,7 +42,7 @@ json methods_json() {
             params.push_back(j);
         }
         methods.push_back({{"name", info->name}, {"doc", info->doc}, {"radiometric", info->radiometric},
-                           {"params", params}});
+                           {"params", params}, {"origin", method_origin(info->name)}});
     }
     return methods;
 }
@@ -74,7 +75,8 @@ void print_text(const json& methods, const json& scenes) {
     for (const json& m : methods) {
         std::cout << "\n  " << m["name"].get<std::string>()
                   << (m["radiometric"].get<bool>() ? "  [radiometric]" : "  [relative values: errors after a scale fit]")
-                  << "\n    " << m["doc"].get<std::string>() << "\n";
+                  << "\n    " << m["doc"].get<std::string>() << "\n    registered by "
+                  << m["origin"].get<std::string>() << "\n";
         for (const json& p : m["params"]) {
             char line[512];
             std::snprintf(line, sizeof line, "    --set %-18s %-5s default %-10s %s", p["name"].get<std::string>().c_str(),
@@ -89,7 +91,7 @@ void print_text(const json& methods, const json& scenes) {
             }
         }
     }
-    std::cout << "\nScenes (" << scenes_directory() << "):\n";
+    std::cout << "\nScenes (" << scenes_directory().string() << "):\n";
     for (const json& s : scenes) {
         char line[512];
         std::snprintf(line, sizeof line, "  %-12s %s", s["name"].get<std::string>().c_str(),

@@ -7,6 +7,7 @@
 #include "command.hpp"
 #include <caustics/reference/reference.hpp>
 #include <caustics/run/render_run.hpp>
+#include <caustics/scene/scene_catalog.hpp>
 
 namespace caustics::cli {
 namespace {

@@ -8,6 +8,7 @@
 
 #include "command.hpp"
 #include <caustics/run/render_run.hpp>
+#include <caustics/scene/scene_catalog.hpp>
 
 namespace caustics::cli {
 namespace {

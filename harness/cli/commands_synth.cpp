@@ -6,6 +6,7 @@
 
 #include "command.hpp"
 #include <caustics/run/render_run.hpp>
+#include <caustics/scene/scene_catalog.hpp>
 #include <caustics/synth/synth.hpp>
 
 namespace caustics::cli {

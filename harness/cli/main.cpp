@@ -3,6 +3,10 @@
 //   caustics: error: <option or file>: <what is wrong>; valid: <what would be valid>
 // (options.hpp checks option values; usage_errors.hpp words CLI11's own usage errors; InputError
 // carries the rest).
+//
+// Before anything else the program loads the method plugins in CAUSTICS_PLUGIN_PATH (plugins.hpp) and
+// refuses to start (exit 2) while two methods, built in or loaded, share a name.
+#include <cstdlib>
 #include <exception>
 #include <functional>
 #include <iostream>
@@ -13,8 +17,10 @@
 #include <CLI/CLI.hpp>
 
 #include "command.hpp"
-#include <caustics/util/errors.hpp>
+#include "plugins.hpp"
 #include "usage_errors.hpp"
+#include <caustics/api/registry.hpp>
+#include <caustics/util/errors.hpp>
 
 namespace {
 
@@ -27,6 +33,8 @@ int report(const std::string& message, int code) {
 
 int main(int argc, char** argv) {
     try {
+        if (const auto conflicts = caustics::registration_conflicts(); !conflicts.empty()) return report(conflicts.front(), 2);
+        if (const char* plugins = std::getenv("CAUSTICS_PLUGIN_PATH")) caustics::cli::load_plugins(plugins);
         CLI::App app{"caustics: a benchmarking harness for real-time caustics methods against an Embree reference",
                      "caustics"};
         app.require_subcommand(1, 1);

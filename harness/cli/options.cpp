@@ -15,7 +15,7 @@
 
 #include <caustics/util/errors.hpp>
 #include <caustics/api/registry.hpp>
-#include <caustics/run/render_run.hpp>
+#include <caustics/scene/scene_catalog.hpp>
 
 namespace caustics::cli {
 namespace {
@@ -228,7 +228,7 @@ CLI::Option* add_method_option(CLI::App& app, std::string& value, const std::str
 
 CLI::Option* add_scene_argument(CLI::App& app, std::string& value, const std::string& doc) {
     CLI::Option* option = app.add_option("scene", value, doc);
-    set_valid_text(option, [] { return "a scene file, or a scene name in " + scenes_directory() + ": " + join(scene_names()); });
+    set_valid_text(option, scene_argument_valid_text);
     return option;
 }
 

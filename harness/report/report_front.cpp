@@ -11,6 +11,7 @@
 #include <vector>
 
 #include <caustics/util/errors.hpp>
+#include <caustics/util/resources.hpp>
 
 namespace caustics {
 namespace fs = std::filesystem;
@@ -68,7 +69,10 @@ int run_report(const std::string& dir) {
         throw InputError("report", "python3",
                          "no python3 with matplotlib, pandas, numpy and OpenImageIO; run scripts/setup.sh "
                          "(Debian packages python3-matplotlib python3-pandas python3-numpy python3-openimageio)");
-    const fs::path script = fs::path(CAUSTICS_SOURCE_DIR) / "scripts" / "report" / "report.py";
+    const fs::path script = data_directory() / "scripts" / "report" / "report.py";
+    if (!fs::is_regular_file(script))
+        throw InputError(script.string(), "", "the report script is missing; valid: an installation or build tree "
+                                              "with scripts/report/ in its data folder (or set CAUSTICS_DATA_DIR)");
     return run_tied_child({python, script.string(), dir}, false);
 }
 

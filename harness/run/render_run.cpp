@@ -17,11 +17,8 @@
 #include <caustics/run/metrics_json.hpp>
 #include <caustics/api/registry.hpp>
 #include <caustics/run/run_errors.hpp>
+#include <caustics/scene/scene_catalog.hpp>
 #include <caustics/util/timing.hpp>
-
-#ifndef CAUSTICS_SOURCE_DIR
-#define CAUSTICS_SOURCE_DIR "."
-#endif
 
 namespace caustics {
 namespace {
@@ -56,45 +53,6 @@ std::string join_messages(const std::vector<std::string>& parts) {
 }
 
 }  // namespace
-
-// ---------------------------------------------------------------------------------------------------
-
-std::string scenes_directory() {
-    std::error_code ec;
-    if (fs::is_directory("scenes", ec)) return "scenes";
-    return (fs::path(CAUSTICS_SOURCE_DIR) / "scenes").string();
-}
-
-std::vector<std::string> scene_names() {
-    std::vector<std::string> names;
-    std::error_code ec;
-    for (const auto& entry : fs::directory_iterator(scenes_directory(), ec))
-        if (entry.path().extension() == ".json" && entry.is_regular_file(ec)) names.push_back(entry.path().stem().string());
-    std::sort(names.begin(), names.end());
-    return names;
-}
-
-std::string resolve_scene_path(const std::string& arg) {
-    const auto valid = [] {
-        std::string names;
-        for (const std::string& n : scene_names()) names += (names.empty() ? "" : ", ") + n;
-        return "a scene file, or a scene name in " + scenes_directory() + ": " + names;
-    };
-    if (arg.empty()) throw invalid_value("SCENE", "empty", valid());
-    std::error_code ec;
-    const fs::file_status st = fs::status(arg, ec);
-    if (ec == std::errc::too_many_symbolic_link_levels) throw invalid_value(arg, "symbolic link loop", valid());
-    if (fs::exists(st)) return arg;   // load_scene checks what it is
-    if (fs::is_symlink(fs::symlink_status(arg, ec)))
-        throw invalid_value(arg, "a symbolic link to a file that does not exist", valid());
-    if (!fs::path(arg).has_parent_path()) {
-        const fs::path dir = scenes_directory();
-        for (const fs::path& candidate : {dir / (arg + ".json"), dir / arg})
-            if (fs::is_regular_file(candidate, ec)) return candidate.string();
-        throw invalid_value(arg, "no such scene file, nor a scene of that name", valid());
-    }
-    throw invalid_value(arg, "no such scene file", valid());
-}
 
 RenderRun run_method(const SceneFrame& sf, const ResolvedMethod& m, const RenderOptions& options,
                      const ReferenceProvider& reference_provider) {

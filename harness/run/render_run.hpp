@@ -30,14 +30,6 @@
 
 namespace caustics {
 
-// A scene argument: an existing path as is, else a name in the scenes folder ("pool" ->
-// scenes/pool.json). Throws InputError (exit 2) for an empty argument, a symbolic link loop, and a path
-// or name that is neither, listing the scene names.
-std::string resolve_scene_path(const std::string& arg);
-// The scenes folder: ./scenes when it exists, else the source tree's scenes/.
-std::string scenes_directory();
-// The names of the scene files in the scenes folder ("pool" for scenes/pool.json), sorted.
-std::vector<std::string> scene_names();
 
 struct RenderRun {
     std::string status;            // "ok", "skipped" (unsupported scene), "unstable" (non-finite output)

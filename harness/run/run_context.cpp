@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <fstream>
 #include <string>
+#include <utility>
 #include <thread>
 
 #include <OpenImageIO/oiioversion.h>
@@ -14,6 +15,8 @@
 #include <fftw3.h>
 #include <tbb/global_control.h>
 #include <tbb/version.h>
+
+#include <caustics/util/resources.hpp>
 
 namespace caustics {
 namespace {
@@ -30,9 +33,7 @@ std::string cpu_model() {
     return "unknown";
 }
 
-std::string git_commit() {
-    const std::string command = std::string("git -C '") + CAUSTICS_SOURCE_DIR +
-                                "' rev-parse --short=12 HEAD 2>/dev/null";
+std::string trimmed_output(const std::string& command) {
     std::array<char, 128> buffer{};
     std::string out;
     if (FILE* pipe = popen(command.c_str(), "r")) {
@@ -40,7 +41,23 @@ std::string git_commit() {
         pclose(pipe);
     }
     while (!out.empty() && (out.back() == '\n' || out.back() == '\r')) out.pop_back();
-    return out.empty() ? "unknown" : out;
+    return out;
+}
+
+// The commit the program was built from, and how that is known: a build tree asks its source tree's git
+// (build.json names the source folder), an installation records the commit of its last build.
+std::pair<std::string, std::string> git_commit() {
+    const nlohmann::json build = build_description();
+    if (build.contains("source_dir") && build["source_dir"].is_string()) {
+        std::string dir = build["source_dir"].get<std::string>();
+        std::string quoted = "'";
+        for (char c : dir) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+        const std::string out = trimmed_output("git -C " + quoted + "' rev-parse --short=12 HEAD 2>/dev/null");
+        return {out.empty() ? "unknown" : out, "source tree"};
+    }
+    if (build.contains("git_commit") && build["git_commit"].is_string() && !build["git_commit"].get<std::string>().empty())
+        return {build["git_commit"].get<std::string>(), "build time"};
+    return {"unknown", "unknown"};
 }
 
 std::string host_name() {
@@ -59,7 +76,9 @@ nlohmann::json run_context() {
     c["build_type"] = build_type();
     c["compiler"] = std::string("g++ ") + __VERSION__;
     c["project_version"] = project_version();
-    c["git_commit"] = git_commit();
+    const auto [commit, known_from] = git_commit();
+    c["git_commit"] = commit;
+    c["git_commit_from"] = known_from;
     c["libraries"] = {{"embree", RTC_VERSION_STRING},
                       {"openimageio", OIIO_VERSION_STRING},
                       {"tbb", TBB_VERSION_STRING},

@@ -13,6 +13,7 @@
 
 #include <caustics/util/errors.hpp>
 #include <caustics/api/registry.hpp>
+#include <caustics/scene/scene_catalog.hpp>
 
 namespace caustics {
 namespace fs = std::filesystem;
@@ -106,16 +107,17 @@ std::string count_text(std::uint64_t n) {
     return n == std::numeric_limits<std::uint64_t>::max() ? "more than 18446744073709551615" : std::to_string(n);
 }
 
+// A scene entry: a path (it has a folder part or ends in .json), relative to the working folder or else to
+// the spec's folder; otherwise the name of a shipped scene (scene/scene_catalog.hpp).
 std::string resolve_scene(const std::string& entry, const std::string& file, const std::string& key) {
-    std::vector<fs::path> candidates;
     const bool looks_like_path = entry.find('/') != std::string::npos || fs::path(entry).extension() == ".json";
-    if (looks_like_path) {
-        candidates.push_back(entry);
-        candidates.push_back(fs::path(file).parent_path() / entry);
-    } else {
-        candidates.push_back(fs::path("scenes") / (entry + ".json"));
-        candidates.push_back(fs::path(CAUSTICS_SOURCE_DIR) / "scenes" / (entry + ".json"));
+    if (!looks_like_path) {
+        if (auto named = find_named_scene(entry)) return named->lexically_normal().string();
+        throw InputError(file, key, "unknown scene '" + entry + "': no file " +
+                                        (scenes_directory() / (entry + ".json")).string() + "; " +
+                                        scene_argument_valid_text());
     }
+    const std::vector<fs::path> candidates{entry, fs::path(file).parent_path() / entry};
     for (const auto& c : candidates)
         if (fs::is_regular_file(c)) return c.lexically_normal().string();
     throw InputError(file, key, "unknown scene '" + entry + "': no file " + candidates.front().string());

@@ -15,6 +15,7 @@
 
 #include <caustics/util/errors.hpp>
 #include <caustics/scene/heightfield/heightfield.hpp>
+#include <caustics/scene/scene_catalog.hpp>
 #include <caustics/util/image_io.hpp>
 #include <caustics/util/timing.hpp>
 

@@ -13,7 +13,7 @@ shift || true
 scenes=("$@")
 [ ${#scenes[@]} -eq 0 ] && scenes=(sine pool sphere)
 photons=${PHOTONS:-"1000000 4000000 16000000 64000000"}
-bin=build/release/harness/cli/caustics
+bin=build/release/bin/caustics
 [ -x "$bin" ] || { echo "reference_noise.sh: build first (scripts/test.sh or cmake --build --preset release)" >&2; exit 1; }
 mkdir -p "$out"
 cache=$(mktemp -d)
