@@ -20,11 +20,11 @@
 
 namespace caustics::test_support {
 
-// The catalog's small scene: a sine water patch (side `size` m, `cells` x `cells`) over a floor 0.4 m
-// below, lit straight down, a 16 x 16 receiver and the given camera. Each catalog file writes its own
-// copy, so that a regression that ignores --out writes into an obviously named folder rather than a
-// shipped scene's.
-inline nlohmann::json small_sine_scene(double size, int cells, const nlohmann::json& camera) {
+// The tests' small scene: a sine water patch (side `size` m, `cells` x `cells`) over a floor 0.4 m
+// below, lit straight down, a `receiver` x `receiver` receiver and the given camera. Each test file
+// writes its own copy, so that a regression that ignores --out writes into an obviously named folder
+// rather than a shipped scene's.
+inline nlohmann::json small_sine_scene(double size, int cells, const nlohmann::json& camera, int receiver = 16) {
     nlohmann::json s = nlohmann::json::parse(R"({
       "description": "catalog scene",
       "lights": [{"type": "directional", "direction": [0, 0, -1], "irradiance": 1.0}],
@@ -42,6 +42,7 @@ inline nlohmann::json small_sine_scene(double size, int cells, const nlohmann::j
     s["camera"] = camera;
     s["objects"][0]["size"] = {size, size};
     s["objects"][0]["resolution"] = {cells, cells};
+    s["receiver"]["resolution"] = {receiver, receiver};
     return s;
 }
 

@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "catalog_support.hpp"
 #include "test_support.hpp"
 
 namespace fs = std::filesystem;
@@ -42,22 +43,9 @@ protected:
 
     // A small, valid scene: sine water over a diffuse floor receiver, directional light.
     static json base_scene() {
-        return json::parse(R"({
-          "description": "test scene",
-          "lights": [{"type": "directional", "direction": [0, 0, -1], "irradiance": 1.0}],
-          "camera": {"position": [0, -1.3, 1.4], "look_at": [0, 0, -0.4], "up": [0, 0, 1], "fov_y": 45,
-                     "width": 48, "height": 36},
-          "objects": [
-            {"name": "water", "shape": "heightfield", "center": [0, 0], "size": [2, 2], "resolution": [64, 64],
-             "base_height": 0.0, "material": {"type": "dielectric", "ior": 1.33},
-             "generator": {"type": "sine", "amplitude": 0.01, "wavelength": 0.25, "direction": [1, 0],
-                           "phase": 0, "speed": 0}},
-            {"name": "floor", "shape": "plane", "center": [0, 0, -0.4], "u": [1, 0, 0], "v": [0, 1, 0],
-             "material": {"type": "diffuse", "albedo": [0.8, 0.8, 0.8]}}
-          ],
-          "receiver": {"object": "floor", "resolution": [32, 32]},
-          "animation": {"frames": 1, "fps": 30}
-        })");
+        const json camera = {{"position", {0, -1.3, 1.4}}, {"look_at", {0, 0, -0.4}}, {"up", {0, 0, 1}},
+                             {"fov_y", 45}, {"width", 48}, {"height", 36}};
+        return caustics::test_support::small_sine_scene(2.0, 64, camera, 32);
     }
 
     std::string write_scene(const std::string& name, const json& scene) {
