@@ -79,6 +79,9 @@ struct RenderRequest {
     // Fill CausticOutput::texture (and texture_rgb with dispersion) when non-null. Only methods whose
     // texture_capability() says yes are asked; the others may ignore it.
     const TextureRequest* texture = nullptr;
+    // Fill CausticOutput::camera_volume. Asked only of methods whose volume_capability() says yes, on
+    // scenes where some medium scatters (scene_scatters).
+    bool camera_volume = false;
 };
 
 struct CausticOutput {
@@ -87,6 +90,13 @@ struct CausticOutput {
     Image camera;         // gbuffer width x height, 1 channel; only covered pixels are read
     Image texture;        // TextureRequest width x height, 1 channel, E_c [W/m^2] (see TextureRequest)
     Image texture_rgb;    // optional colour version of the texture (dispersion), 3 channels
+    // Volume caustic radiance L_v [W/(m^2 sr)] (DESIGN.md section 3), camera G-buffer width x height, 1
+    // channel: per pixel, the radiance scattered once towards the camera, along the primary ray from the
+    // pinhole to its first hit (to infinity on a miss) and inside the camera's own medium
+    // (medium_at(scene, gbuffer.medium_object)), by light that had at least one specular event,
+    // attenuated by extinction along the whole path. Scattering seen through a refracting surface is not
+    // part of it. Every pixel is read.
+    Image camera_volume;
     std::map<std::string, Image> debug;                  // optional: caustic map, overlays
     std::vector<std::pair<std::string, double>> stages_ms;  // optional per-stage timings of render()
     Health health;
@@ -99,6 +109,12 @@ public:
     // Whether render() can fill a periodic texture (RenderRequest::texture) for this scene.
     virtual Capability texture_capability(const Scene& /*scene*/) const {
         return Capability::no("does not synthesise periodic textures");
+    }
+    // Whether render() can fill camera_volume for this scene. A scene with a scattering medium
+    // (scene_scatters) is rendered only by methods that say yes: its caustics are attenuated by
+    // extinction and include the volume view; the others are skipped with this reason.
+    virtual Capability volume_capability(const Scene& /*scene*/) const {
+        return Capability::no("does not render volume caustics (camera_volume)");
     }
     virtual void prepare(const Scene& /*scene*/) {}
     virtual void update(const FrameGeometry& /*frame*/) {}

@@ -1,5 +1,7 @@
 #include <caustics/frame/camera.hpp>
 
+#include <algorithm>
+
 #include <cmath>
 
 #include <tbb/blocked_range.h>
@@ -79,7 +81,32 @@ CameraGBuffer build_camera_gbuffer(const RayTracer& tracer, const Camera& camera
                 g.covered[i] = obj.material.type == MaterialType::Diffuse ? 1 : 0;
             }
     });
+    g.medium_object = enclosing_dielectric(tracer, model.position);
     return g;
+}
+
+int enclosing_dielectric(const RayTracer& tracer, const glm::dvec3& p) {
+    // Up first (a height field's water lies below it), then five more, none along an axis of the scene.
+    static const glm::dvec3 kDirections[] = {{0.013, 0.021, 1.0}, {0.61, 0.37, -0.7}, {-0.53, 0.71, 0.46},
+                                             {0.29, -0.83, 0.47}, {-0.77, -0.41, -0.49}, {0.9, -0.2, 0.38}};
+    const Scene& scene = *tracer.frame().scene;
+    std::vector<int> votes;
+    for (const glm::dvec3& d : kDirections) {
+        const glm::dvec3 dir = glm::normalize(d);
+        const Hit hit = tracer.intersect(p, dir);
+        int inside = -1;
+        if (hit.valid && glm::dot(dir, hit.geometric_normal) > 0.0 &&
+            scene.objects.at(static_cast<std::size_t>(hit.object)).material.type == MaterialType::Dielectric)
+            inside = hit.object;
+        votes.push_back(inside);
+    }
+    // The most frequent answer; ties go to the first ray's.
+    int best = votes.front(), best_count = 0;
+    for (int v : votes) {
+        const auto c = static_cast<int>(std::count(votes.begin(), votes.end(), v));
+        if (c > best_count) best = v, best_count = c;
+    }
+    return best;
 }
 
 }  // namespace caustics

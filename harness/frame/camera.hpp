@@ -31,9 +31,17 @@ struct CameraGBuffer {
     std::vector<int> object;               // primary-hit object index or -1
     std::vector<glm::vec3> position;       // primary-hit position
     std::vector<glm::vec3> normal;         // primary-hit shading normal (facing the camera)
+    // The dielectric object whose inside holds the camera (-1: outside every dielectric). The medium
+    // along every primary ray up to its hit is medium_at(scene, medium_object) (camera_volume).
+    int medium_object = -1;
     std::size_t index(int x, int y) const { return static_cast<std::size_t>(y) * width + x; }
 };
 
 CameraGBuffer build_camera_gbuffer(const RayTracer& tracer, const Camera& camera);
+
+// The dielectric object whose inside holds point p, or -1: the first surface a ray from p meets, seen
+// from its back side, is the inside of that object (a closed object, or the water under a height field).
+// Rays in a few fixed directions vote, so a ray that grazes an edge does not decide alone.
+int enclosing_dielectric(const RayTracer& tracer, const glm::dvec3& p);
 
 }  // namespace caustics

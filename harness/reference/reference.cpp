@@ -146,6 +146,7 @@ void add_ledger(FluxLedger& sum, const FluxLedger& l) {
     sum.direct += l.direct;
     sum.escaped += l.escaped;
     sum.absorbed += l.absorbed;
+    sum.scattered += l.scattered;
     sum.truncated += l.truncated;
 }
 
@@ -445,7 +446,7 @@ ReferenceResult finish_reference(const Transport& transport, const ReceiverChart
     const double watts = transport.scale * sums->lights / (static_cast<double>(sums->per_replica) * sums->replicas);
     const FluxLedger& u = sums->ledger_units;
     result.ledger = {u.emitted * watts, u.deposited_receiver * watts, u.deposited_other * watts, u.direct * watts,
-                     u.escaped * watts, u.absorbed * watts, u.truncated * watts};
+                     u.escaped * watts, u.absorbed * watts, u.scattered * watts, u.truncated * watts};
     result.photons = sums->per_replica * sums->replicas;
     result.replicas = static_cast<int>(sums->replicas);
     result.sums = std::move(sums);

@@ -30,10 +30,11 @@ struct FluxLedger {
     double deposited_other = 0.0;     // caustic flux on other diffuse objects
     double direct = 0.0;              // reached a diffuse object with no specular event (not caustic)
     double escaped = 0.0;             // left the scene
-    double absorbed = 0.0;            // Beer-Lambert absorption inside dielectrics
+    double absorbed = 0.0;            // absorption by a medium (inside dielectrics or the scene's)
+    double scattered = 0.0;           // scattered out of the path by a medium (extinction minus absorption)
     double truncated = 0.0;           // exceeded scene.max_specular_depth
     double accounted() const {
-        return deposited_receiver + deposited_other + direct + escaped + absorbed + truncated;
+        return deposited_receiver + deposited_other + direct + escaped + absorbed + scattered + truncated;
     }
 };
 
@@ -72,6 +73,8 @@ struct ReferenceSums {
     std::size_t bins = 0, pixels = 0;
     std::vector<std::int64_t> bin_sums;     // replica-major: [r * bins + b]
     std::vector<std::int64_t> pixel_sums;   // [r * pixels + p]
+    std::size_t volume_pixels = 0;          // camera_volume: pixels (0: not measured)
+    std::vector<std::int64_t> volume_sums;  // [r * volume_pixels + p]
     FluxLedger ledger_units;                // in units of q (converted to W by the result)
 };
 
@@ -85,6 +88,12 @@ struct ReferenceResult {
     std::vector<std::uint8_t> camera_covered;
     double noise_nrmse = 0.0;   // sqrt(mean(stderr^2)) / mean(E_c) on the receiver map
     double noise_nrmse_camera = 0.0;
+    // Volume caustic radiance L_v per camera pixel [W/(m^2 sr)] (method.hpp, CausticOutput::camera_volume),
+    // measured where the scene scatters (scene_scatters) and the camera view is asked; empty otherwise.
+    Image camera_volume;
+    Image camera_volume_stderr;
+    std::vector<Image> camera_volume_replicas;
+    double noise_nrmse_volume = 0.0;   // over every pixel
     FluxLedger ledger;
     std::uint64_t photons = 0;  // over all replicas
     std::uint64_t seed = 0;

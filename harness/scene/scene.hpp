@@ -1,6 +1,7 @@
 #pragma once
 // The scene model (DESIGN.md section 8). Coordinates are right-handed with +z up: height fields are
 // z = h(x, y) and water lies below its surface. Lengths are in metres.
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -28,6 +29,11 @@ struct Material {
     double ior = 1.5;          // dielectric: index of refraction (the outside is air, n = 1)
     double dispersion = 0.0;   // dielectric: the index spans [ior, ior + dispersion] over the visible band
     double absorption = 0.0;   // dielectric: Beer-Lambert coefficient Ka [1/m] inside the object
+    // dielectric: the homogeneous medium inside ("medium" on the material: murky water). Scattering
+    // [1/m] takes light out of the caustic (extinction = absorption + scattering) and scatters it once
+    // towards the camera (camera_volume); anisotropy is the Henyey-Greenstein g.
+    double scattering = 0.0;
+    double anisotropy = 0.0;
     glm::dvec3 albedo{0.8};    // diffuse: reflectance, for beauty images only
     bool is_specular() const { return type != MaterialType::Diffuse; }
 };
@@ -103,8 +109,7 @@ struct Receiver {
     int height = 256;
 };
 
-// An optional homogeneous participating medium filling the scene (parsed and validated; volume
-// caustics methods use it).
+// An optional homogeneous participating medium filling the scene outside every dielectric (fog).
 struct Medium {
     bool present = false;
     double ior = 1.0;
@@ -135,6 +140,41 @@ struct Scene {
 
     const Object& receiver_object() const { return objects.at(static_cast<std::size_t>(receiver.object_index)); }
 };
+
+// The homogeneous medium light travels through at one place: inside dielectric `object`, or outside
+// every dielectric (object -1: the scene's medium, or vacuum).
+struct MediumCoefficients {
+    double absorption = 0.0;   // sigma_a [1/m]
+    double scattering = 0.0;   // sigma_s [1/m]
+    double anisotropy = 0.0;   // Henyey-Greenstein g in (-1, 1)
+    double extinction() const { return absorption + scattering; }   // sigma_t
+    bool scatters() const { return scattering > 0.0; }
+};
+
+inline MediumCoefficients medium_at(const Scene& scene, int object) {
+    if (object >= 0) {
+        const Material& m = scene.objects.at(static_cast<std::size_t>(object)).material;
+        return {m.absorption, m.scattering, m.anisotropy};
+    }
+    if (!scene.medium.present) return {};
+    return {scene.medium.absorption, scene.medium.scattering, scene.medium.anisotropy};
+}
+
+// Whether some medium of the scene scatters: then its caustics include volume caustic radiance
+// (camera_volume, DESIGN.md section 3) and every caustic path is attenuated by extinction.
+inline bool scene_scatters(const Scene& scene) {
+    if (scene.medium.present && scene.medium.scattering > 0.0) return true;
+    for (const Object& o : scene.objects)
+        if (o.material.type == MaterialType::Dielectric && o.material.scattering > 0.0) return true;
+    return false;
+}
+
+// The Henyey-Greenstein phase function [1/sr] for the cosine between the direction light travels in
+// before and after scattering (g > 0: forward scattering); it integrates to 1 over the sphere.
+inline double henyey_greenstein(double cos_theta, double g) {
+    const double d = 1.0 + g * g - 2.0 * g * cos_theta;
+    return (1.0 - g * g) / (4.0 * 3.14159265358979323846 * d * std::sqrt(d));
+}
 
 // Reads and validates a scene file. Throws InputError (file, key, what is valid) on any bad input.
 Scene load_scene(const std::string& path);

@@ -160,11 +160,24 @@ Material parse_material(const JsonNode& n) {
     Material m;
     const std::string type = n.at("type").as_enum({"dielectric", "mirror", "diffuse"});
     if (type == "dielectric") {
-        n.check_keys({"type", "ior", "dispersion", "absorption"});
+        n.check_keys({"type", "ior", "dispersion", "absorption", "medium"});
         m.type = MaterialType::Dielectric;
         m.ior = n.at("ior").as_positive();
         if (n.has("dispersion")) m.dispersion = n.at("dispersion").as_nonnegative();
         if (n.has("absorption")) m.absorption = coefficient(n.at("absorption"));
+        if (n.has("medium")) {
+            // The medium inside the object; `absorption` on the material is its absorption alone, so
+            // the two may not both say it.
+            const JsonNode md = n.at("medium");
+            md.check_keys({"absorption", "scattering", "anisotropy"});
+            if (md.has("absorption")) {
+                if (n.has("absorption"))
+                    md.at("absorption").fail("repeats the material's `absorption`; valid: give it in one place");
+                m.absorption = coefficient(md.at("absorption"));
+            }
+            if (md.has("scattering")) m.scattering = coefficient(md.at("scattering"));
+            if (md.has("anisotropy")) m.anisotropy = md.at("anisotropy").as_number_in(-1.0, 1.0, true, true);
+        }
     } else if (type == "mirror") {
         n.check_keys({"type"});
         m.type = MaterialType::Mirror;
