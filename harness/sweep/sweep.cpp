@@ -363,6 +363,7 @@ std::string results_csv(const SweepSpec& spec, const std::vector<json>& rows) {
                                "consistent_with_reference"}) {
         add(metric, {"error", "receiver", metric});
         add(std::string("camera_") + metric, {"error", "camera", metric});
+        add(std::string("volume_") + metric, {"error", "camera_volume", metric});
     }
     // The error the report ranks, of the kind the method is judged by (fitted when not radiometric).
     columns.push_back({"error_kind", [](const json& r) {
@@ -393,6 +394,9 @@ std::string results_csv(const SweepSpec& spec, const std::vector<json>& rows) {
                            return t.is_null() ? at_path(r, {"reference", "noise_nrmse"}) : t;
                        }});
     add("reference_noise_nrmse", {"reference", "noise_nrmse"});
+    add("reference_noise_nrmse_volume", {"reference", "noise_nrmse_volume"});
+    add("volume_baseline_error", {"baseline_volume", "error"});
+    add("volume_error_vs_baseline", {"error", "camera_volume", "error_vs_baseline"});
     add("noise_target", {"reference", "noise_target"});
     add("noise_target_met", {"reference", "noise_target_met"});
     add("below_reference_noise", {"below_reference_noise"});
