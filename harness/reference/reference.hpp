@@ -41,9 +41,9 @@ struct FluxLedger {
     }
 };
 
-// camera_volume leaves out scattering closer than this to the pinhole [m]: 1/r^2 there has infinite
-// variance (reference_volume.cpp); its share of a camera ray's integral is about this over the ray's length.
-constexpr double kVolumeMinDistance = 1e-3;
+// camera_volume leaves out scattering closer than this to the pinhole [m]: the volume view's near
+// distance (frame/camera.hpp), where 1/r^2 would otherwise have infinite variance (reference_volume.cpp).
+constexpr double kVolumeMinDistance = kVolumeNearDistance;
 
 struct ReferenceSettings {
     // Photons over all replicas, rounded up to a multiple of replicas x lights. With a noise target it is

@@ -17,9 +17,8 @@
 // Fixed point: the sum stores x = dL Omega_pix s_k / (light scale) with s_k = max(d_k, r_min)^2, d_k
 // the distance to the pixel's primary hit (the scene bounds' far corner for a miss), so the
 // increments are O(w) for points near the surface the pixel sees. Near the pinhole 1/r^2 has
-// infinite variance; points closer than r_min = kVolumeMinDistance (1 mm) are left out of L_v, which
-// bounds every increment by w p_max s_k / r_min^2 (a relative bias of about r_min / d_k of a ray's
-// integral, below 1e-3 for the scenes here). The increments are clamped to 2^62 and the sums saturate
+// infinite variance; points closer than r_min = kVolumeMinDistance (the volume view's near distance,
+// 5 cm) are not part of L_v by definition, which bounds every increment by w p_max s_k / r_min^2. The increments are clamped to 2^62 and the sums saturate
 // at 2^63 - 1 rather than wrap (min(a + b, M) is associative for non-negative terms, so the result stays
 // the same for any thread count); no scene here comes within many orders of magnitude of either.
 #include "detail/transport.hpp"
