@@ -23,6 +23,7 @@
 #include <unistd.h>
 
 #include <caustics/util/hash.hpp>
+#include <caustics/util/image_io.hpp>
 #include <caustics/reference/reference.hpp>
 
 namespace caustics {
@@ -303,7 +304,7 @@ void store_entry(const ReferenceResult& result, const std::string& key, const st
     std::error_code ec;
     fs::create_directories(cache_dir, ec);
     const fs::path path = fs::path(cache_dir) / (key + "-" + std::to_string(result.photons) + ".ref");
-    const fs::path tmp = fs::path(path.string() + ".tmp." + std::to_string(::getpid()));
+    const fs::path tmp = fs::path(path.string() + temporary_suffix());
     {
         std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
         const std::string encoded = encode_file(result, key);

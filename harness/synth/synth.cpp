@@ -113,7 +113,7 @@ bool write_gif(const std::vector<SynthFrame>& frames, double exposure, int max_s
     }
     fs::path p(path);
     const std::string tmp =
-        (p.parent_path() / (p.stem().string() + ".tmp." + std::to_string(::getpid()) + p.extension().string())).string();
+        (p.parent_path() / (p.stem().string() + temporary_suffix() + p.extension().string())).string();
     if (!out->open(tmp, static_cast<int>(specs.size()), specs.data())) {
         why = "cannot open " + tmp + ": " + out->geterror();
         return false;

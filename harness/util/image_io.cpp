@@ -1,6 +1,7 @@
 #include <caustics/util/image_io.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdint>
@@ -23,7 +24,7 @@ namespace fs = std::filesystem;
 // The temporary sibling of `path`, keeping the extension so OIIO picks the same format.
 std::string temporary_name(const std::string& path) {
     fs::path p(path);
-    std::string tmp = p.stem().string() + ".tmp." + std::to_string(::getpid()) + p.extension().string();
+    std::string tmp = p.stem().string() + temporary_suffix() + p.extension().string();
     return (p.parent_path() / tmp).string();
 }
 
@@ -96,9 +97,21 @@ void write_png(const Image& linear, const std::string& path, double exposure) {
     write_oiio(path, linear.width, linear.height, c, OIIO::TypeDesc::UINT8, bytes.data());
 }
 
+std::string temporary_suffix() {
+    static const std::string suffix = [] {
+        char host[256] = {};
+        if (gethostname(host, sizeof host - 1) != 0) host[0] = '\0';
+        std::string h;
+        for (const char* c = host; *c; ++c)
+            h += (std::isalnum(static_cast<unsigned char>(*c)) || *c == '-') ? *c : '_';
+        return ".tmp." + (h.empty() ? std::string("host") : h) + "." + std::to_string(::getpid());
+    }();
+    return suffix;
+}
+
 void write_text_atomic(const std::string& path, const std::string& text) {
     ensure_parent(path);
-    const std::string tmp = path + ".tmp." + std::to_string(::getpid());
+    const std::string tmp = path + temporary_suffix();
     {
         std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
         if (!out) throw std::runtime_error("cannot write " + tmp + ": " + std::strerror(errno));

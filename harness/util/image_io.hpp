@@ -14,4 +14,8 @@ void write_png(const Image& linear, const std::string& path, double exposure = 1
 // Writes text to path atomically (path.tmp.<pid>, then rename).
 void write_text_atomic(const std::string& path, const std::string& text);
 
+// ".tmp.<host>.<pid>": the temporary name's suffix of an atomic write, unique across the processes of
+// every node that shares a file system (sharded sweeps on a cluster write one cache and one folder).
+std::string temporary_suffix();
+
 }  // namespace caustics
