@@ -20,10 +20,13 @@ constexpr Stops kDiverging = {{{0.230, 0.299, 0.754}, {0.400, 0.505, 0.900}, {0.
                                {0.800, 0.860, 0.990}, {1.000, 1.000, 1.000}, {0.990, 0.840, 0.780},
                                {0.950, 0.640, 0.540}, {0.880, 0.400, 0.320}, {0.706, 0.016, 0.150}}};
 
+// Entries of a table: 256, or 255 for the diverging map, whose middle entry (127) is then exactly t = 1/2.
+int last_entry(ColorMap c) { return c == ColorMap::Diverging ? 254 : 255; }
+
 std::array<Rgba, 256> make_table(ColorMap c) {
     std::array<Rgba, 256> table{};
-    for (int i = 0; i < 256; ++i) {
-        const double t = i / 255.0;
+    for (int i = 0; i <= last_entry(c); ++i) {
+        const double t = i / static_cast<double>(last_entry(c));
         std::array<double, 3> rgb{t, t, t};
         if (c != ColorMap::Grey) {
             const Stops& s = c == ColorMap::Inferno ? kInferno : c == ColorMap::Viridis ? kViridis : kDiverging;
@@ -67,7 +70,7 @@ double Mapping::normalise(double v) const {
 }
 
 Rgba colormap_rgba(ColorMap c, double t) {
-    const int i = static_cast<int>(std::lround(std::clamp(t, 0.0, 1.0) * 255.0));
+    const int i = static_cast<int>(std::lround(std::clamp(t, 0.0, 1.0) * last_entry(c)));
     return table_of(c)[i];
 }
 

@@ -35,7 +35,8 @@ struct Mapping {
 };
 
 using Rgba = std::array<std::uint8_t, 4>;
-// The colour of t in [0, 1]: a 256-entry table, entry round(255 t).
+// The colour of t in [0, 1]: a 256-entry table, entry round(255 t) (diverging: 255 entries, round(254 t),
+// so that t = 1/2, a zero difference, is its white middle entry).
 Rgba colormap_rgba(ColorMap c, double t);
 Rgba invalid_rgba();
 

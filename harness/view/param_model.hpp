@@ -7,7 +7,7 @@
 //
 // A slider needs finite ends. Where the table declares an infinite bound, the slider's end is the
 // default moved by ten times max(|default|, 1) (for ints, rounded inwards), and never past the finite
-// bound: e.g. a float in [0, inf) with default 0.5 slides over [0, 5.5]. A value given with --set
+// bound: e.g. a float in [0, inf) with default 0.5 slides over [0, 10.5]. A value given with --set
 // outside that span widens the slider to include it. A range whose ends are both positive and at least
 // a factor 100 apart slides logarithmically.
 #include <map>
