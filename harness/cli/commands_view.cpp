@@ -24,7 +24,8 @@ Command make_view_command() {
             std::string scene, method, screenshot, cache;
             std::vector<std::string> sets;
             int frame = 0, frames = 1;
-            bool wait_reference = false, no_reference = false;
+            bool wait_reference = false, no_reference = false, split = false;
+            std::string space;
             ReferenceSettings reference{.photons = 4'000'000};
         };
         auto a = std::make_shared<Args>();
@@ -38,6 +39,9 @@ Command make_view_command() {
         app.add_option("--screenshot", a->screenshot, "write the window as PNG (and FILE.json) after --frames frames, then exit");
         app.add_option("--frames", a->frames, "frames (each: update + render) before the screenshot")
             ->check(CLI::Range(1, 100000));
+        app.add_option("--space", a->space, "the panes' space to start with (default: volume where the medium scatters, else receiver)")
+            ->check(CLI::IsMember({"receiver", "camera", "volume"}));
+        app.add_flag("--split", a->split, "start in the split view (method | reference)");
         app.add_flag("--wait-reference", a->wait_reference, "the screenshot waits for the final reference");
         return [a]() -> int {
 #ifdef CAUSTICS_HAVE_VIEWER
@@ -52,6 +56,8 @@ Command make_view_command() {
             o.screenshot = a->screenshot;
             o.frames = a->frames;
             o.wait_reference = a->wait_reference;
+            o.space = a->space;
+            o.split = a->split;
             return viewer::run_viewer(o);
 #else
             throw InputError("view", "", "this build has no viewer (CAUSTICS_BUILD_VIEWER is off: GLFW, OpenGL or Dear ImGui was "

@@ -91,7 +91,7 @@ ReferenceResult ProgressiveReference::trace_round(std::uint64_t photons, const R
 }
 
 void ProgressiveReference::run() {
-    if (settings_.low_priority) setpriority(PRIO_PROCESS, static_cast<id_t>(::syscall(SYS_gettid)), 19);
+    if (settings_.low_priority) setpriority(PRIO_PROCESS, static_cast<id_t>(::syscall(SYS_gettid)), kNice);
     try {
         const ReferenceSettings& s = settings_.reference;
         const std::size_t lights = sf_.scene().lights.size();

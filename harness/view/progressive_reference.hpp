@@ -15,7 +15,10 @@
 // count is then the photon cap.
 //
 // Low priority: the thread traces in its own one-thread TBB arena (no worker of the method's pool) and
-// lowers its own scheduling priority to nice 19, so the method's renders keep the cores.
+// lowers its own scheduling priority to nice 10 (kNice), so the method's renders keep the cores: under
+// Linux's fair scheduler a nice-10 thread beside busy nice-0 ones gets about a tenth of a core (weights
+// 110 against 1024), where nice 19 (weight 15) would starve it while the viewer renders continuously;
+// when the viewer idles (rendering only on a change) it gets a whole core.
 #include <atomic>
 #include <cstdint>
 #include <memory>
@@ -28,6 +31,8 @@
 #include <caustics/run/scene_frame.hpp>
 
 namespace caustics::view {
+
+inline constexpr int kNice = 10;
 
 struct ProgressiveSettings {
     ReferenceSettings reference{.photons = 4'000'000, .progress = false};   // photons: the final count

@@ -1,6 +1,7 @@
 #include <caustics/view/session.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 
 #include <caustics/api/registry.hpp>
@@ -73,6 +74,7 @@ void Session::make_method() {
     timing_.prepare_ms = clock.ms();
     frame_times_.clear();
     rendered_ = false;
+    ++generation_;
 }
 
 void Session::start_reference() {
@@ -91,6 +93,7 @@ void Session::set_frame(int frame) {
     frame_ = std::make_unique<SceneFrame>(std::move(scene), frame);
     frame_index_ = frame;
     analytic_ = analytic_truth(frame_->geometry(), frame_->chart());
+    ++generation_;
     start_reference();
 }
 
@@ -161,8 +164,15 @@ const Image& Session::baseline_for(const Image& truth, std::uint64_t photons) {
     return baseline_;
 }
 
-void Session::refresh_errors() {
+void Session::refresh_errors(bool force) {
     if (progressive_) reference_ = progressive_->latest();
+    const std::uint64_t photons = reference_ ? reference_->photons : 0;
+    const double now = std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+    if (!force && rendered_ && measured_generation_ == generation_ && measured_photons_ == photons && now - measured_at_s_ < 0.5)
+        return;
+    measured_generation_ = generation_;
+    measured_photons_ = photons;
+    measured_at_s_ = now;
     errors_ = {};
     status_ = "ok";
     if (!rendered_) return;

@@ -89,8 +89,13 @@ public:
     const Image* receiver_truth() const;
     const Image* receiver_truth_stderr() const;      // null for a closed form
     const LiveErrors& errors() const { return errors_; }
-    // Re-measures against the newest reference without rendering (the reference sharpened).
-    void refresh_errors();
+    // Measures the last render against the newest reference. Measuring (net errors over the replicas)
+    // costs as much as a fast method's render, so it is skipped when nothing it depends on changed (the
+    // frame, method, parameters or the reference's photons) and the last measure is under half a second
+    // old; `force` measures regardless.
+    void refresh_errors(bool force = false);
+    // Bumped by every change of frame, method or parameters (what the panes and the beauty depend on).
+    std::uint64_t generation() const { return generation_; }
 
     // The scene argument as given (for the record actions).
     const std::string& scene_argument() const { return options_.scene; }
@@ -116,6 +121,8 @@ private:
     std::unique_ptr<ProgressiveReference> progressive_;
     std::shared_ptr<const ReferenceResult> reference_;
     LiveErrors errors_;
+    std::uint64_t generation_ = 1, measured_generation_ = 0, measured_photons_ = 0;
+    double measured_at_s_ = -1.0;
     Image flat_, baseline_;
     int flat_frame_ = -1;
     std::pair<int, std::uint64_t> baseline_key_{-1, 0};

@@ -103,7 +103,11 @@ Pane unavailable(Pane p, std::string why) {
 
 }  // namespace
 
-Pane make_pane(const Session& s, ViewKind kind, const DisplaySettings& d, const Image* beauty) {
+SpaceMappings space_mappings(const Session& s, Space space, const DisplaySettings& d) {
+    return {shared_mapping(s, space, d), difference_mapping(s, space, d)};
+}
+
+Pane make_pane(const Session& s, ViewKind kind, const DisplaySettings& d, const Image* beauty, const SpaceMappings* mappings) {
     Pane p;
     p.kind = kind;
     p.title = to_string(kind);
@@ -143,17 +147,17 @@ Pane make_pane(const Session& s, ViewKind kind, const DisplaySettings& d, const 
     if (is_method) {
         if (!m) return unavailable(p, s.rendered() ? "the method gives no such view" : "not rendered yet");
         shown = m;
-        p.mapping = shared_mapping(s, space, d);
+        p.mapping = mappings ? mappings->shared : shared_mapping(s, space, d);
     } else if (is_truth) {
         if (!t) return unavailable(p, "no reference yet");
         shown = t;
-        p.mapping = shared_mapping(s, space, d);
+        p.mapping = mappings ? mappings->shared : shared_mapping(s, space, d);
     } else {
         if (!m || !t) return unavailable(p, !m ? "no method output" : "no reference yet");
         if (m->width != t->width || m->height != t->height) return unavailable(p, "sizes differ");
         diff = difference(*m, *t);
         shown = &diff;
-        p.mapping = difference_mapping(s, space, d);
+        p.mapping = mappings ? mappings->difference : difference_mapping(s, space, d);
     }
     p.width = shown->width;
     p.height = shown->height;

@@ -55,8 +55,16 @@ const Image* truth_map(const Session& s, Space space);
 const Image* truth_stderr(const Session& s, Space space);
 const std::vector<std::uint8_t>* space_mask(const Session& s, Space space);
 
-// Builds one pane. `beauty` is the composited beauty image (linear RGB) for ViewKind::Beauty.
-Pane make_pane(const Session& s, ViewKind kind, const DisplaySettings& d, const Image* beauty = nullptr);
+// Both mappings of a space, computed once for all its panes (each takes a quantile of a map).
+struct SpaceMappings {
+    Mapping shared, difference;
+};
+SpaceMappings space_mappings(const Session& s, Space space, const DisplaySettings& d);
+
+// Builds one pane. `beauty` is the composited beauty image (linear RGB) for ViewKind::Beauty; `mappings`
+// (optional) those of the pane's space, else computed here.
+Pane make_pane(const Session& s, ViewKind kind, const DisplaySettings& d, const Image* beauty = nullptr,
+               const SpaceMappings* mappings = nullptr);
 
 // The numbers under the mouse, at pixel (x, y) of the space's map (row 0 first, as stored).
 struct Readout {

@@ -64,7 +64,10 @@ int run_viewer(const ViewerOptions& options) {
         int frames_done = 0;
         double first_frame_ms = -1.0;
         while (!glfwWindowShouldClose(window)) {
-            glfwPollEvents();
+            // Idle (nothing to render until a change): wait for input, waking a few times a second to
+            // show the reference's progress; the reference thread then has the cores.
+            if (v.idle() && options.screenshot.empty()) glfwWaitEventsTimeout(0.25);
+            else glfwPollEvents();
             const bool last = !options.screenshot.empty() && frames_done + 1 >= options.frames;
             if (last && options.wait_reference) v.session().wait_for_reference();
             Stopwatch frame_clock;

@@ -13,6 +13,8 @@ struct ViewerOptions {
     int frames = 1;               // UI frames (each: update + render) before the screenshot
     bool wait_reference = false;  // the screenshot waits for the final reference
     int width = 1024, height = 768;
+    std::string space;            // receiver | camera | volume; empty: volume on a scattering scene, else receiver
+    bool split = false;           // start in the split view
 };
 
 // Exit code: 0, or 2 when there is no display (one message on stderr, before any other work).

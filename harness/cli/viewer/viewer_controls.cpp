@@ -63,6 +63,55 @@ void Viewer::controls() {
         }
         ImGui::EndCombo();
     }
+    ImGui::Separator();
+    // Numbers.
+    const view::RenderTiming& t = s.timing();
+    ImGui::Text("frame %.2f ms median of %zu (update %.2f, render %.2f)", t.median_frame_ms, t.samples, t.update_ms, t.render_ms);
+    ImGui::TextDisabled("prepare %.1f ms; viewer overhead %.2f ms", t.prepare_ms, overhead_ms_.empty() ? 0.0 : overhead_ms_.back());
+    for (const auto& [stage, ms] : s.output().stages_ms) ImGui::BulletText("%s %.2f ms", stage.c_str(), ms);
+    if (!s.output().health.counters.empty() && ImGui::TreeNode("health")) {
+        for (const auto& [name, n] : s.output().health.counters) ImGui::Text("%s %lld", name.c_str(), static_cast<long long>(n));
+        ImGui::TreePop();
+    }
+    const view::LiveErrors& e = s.errors();
+    ImGui::Text("truth: %s", e.truth_kind.empty() ? "(none yet)" : e.truth_kind.c_str());
+    if (s.status() != "ok") ImGui::TextColored(ImVec4(1, 0.4f, 0.4f, 1), "%s", s.status().c_str());
+    error_line("receiver", e.receiver);
+    error_line("camera", e.camera);
+    if (!s.output().camera_volume.empty()) error_line("volume", e.volume);
+    const view::ProgressiveStatus st = s.reference_status();
+    ImGui::Text("reference %.3g / %.3g photons%s", static_cast<double>(st.photons), static_cast<double>(st.target),
+                st.from_cache ? " (cache)" : "");
+    if (st.photons_per_second > 0.0) ImGui::TextDisabled("  %d rounds, %.3g photons/s%s", st.rounds, st.photons_per_second, st.done ? ", done" : "");
+    if (!st.error.empty()) ImGui::TextColored(ImVec4(1, 0.4f, 0.4f, 1), "%s", st.error.c_str());
+    ImGui::Separator();
+    // Display.
+    int space = static_cast<int>(space_);
+    if (ImGui::Combo("space", &space, "receiver map\0camera view\0volume (camera_volume)\0")) {
+        space_ = static_cast<view::Space>(space);
+    }
+    ImGui::Checkbox("split method | reference", &split_);
+    if (split_) ImGui::SliderFloat("split", &split_at_, 0.02f, 0.98f, "%.2f", ImGuiSliderFlags_AlwaysClamp);
+    int exposure = static_cast<int>(display_.exposure);
+    ImGui::RadioButton("linear", &exposure, 0);
+    ImGui::SameLine();
+    ImGui::RadioButton("log", &exposure, 1);
+    display_.exposure = static_cast<view::Exposure>(exposure);
+    if (display_.exposure == view::Exposure::Log) {
+        float decades = static_cast<float>(display_.decades);
+        if (ImGui::SliderFloat("decades", &decades, 1.0f, 6.0f, "%.1f", ImGuiSliderFlags_AlwaysClamp)) display_.decades = decades;
+    }
+    float gain = static_cast<float>(display_.exposure_gain);
+    if (ImGui::SliderFloat("gain", &gain, 0.05f, 20.0f, "%.2f", ImGuiSliderFlags_Logarithmic | ImGuiSliderFlags_AlwaysClamp)) {
+        display_.exposure_gain = gain;
+        beauty_dirty_ = true;
+    }
+    int cmap = static_cast<int>(display_.colormap);
+    if (ImGui::Combo("colour map", &cmap, "inferno\0viridis\0grey\0")) display_.colormap = static_cast<view::ColorMap>(cmap);
+    ImGui::Separator();
+    ImGui::Separator();
+    // Parameters, generated from the method's table (view/param_model.hpp).
+    ImGui::TextDisabled("parameters of %s", s.method_name().c_str());
     view::ParamModel& pm = s.params();
     bool changed = false;
     for (std::size_t i = 0; i < pm.widgets().size(); ++i) {
@@ -98,51 +147,6 @@ void Viewer::controls() {
         s.parameters_changed();
         beauty_dirty_ = dirty_ = true;
     }
-    ImGui::Separator();
-    // Display.
-    int space = static_cast<int>(space_);
-    if (ImGui::Combo("space", &space, "receiver map\0camera view\0volume (camera_volume)\0")) {
-        space_ = static_cast<view::Space>(space);
-    }
-    ImGui::Checkbox("split method | reference", &split_);
-    if (split_) ImGui::SliderFloat("split", &split_at_, 0.02f, 0.98f, "%.2f", ImGuiSliderFlags_AlwaysClamp);
-    int exposure = static_cast<int>(display_.exposure);
-    ImGui::RadioButton("linear", &exposure, 0);
-    ImGui::SameLine();
-    ImGui::RadioButton("log", &exposure, 1);
-    display_.exposure = static_cast<view::Exposure>(exposure);
-    if (display_.exposure == view::Exposure::Log) {
-        float decades = static_cast<float>(display_.decades);
-        if (ImGui::SliderFloat("decades", &decades, 1.0f, 6.0f, "%.1f", ImGuiSliderFlags_AlwaysClamp)) display_.decades = decades;
-    }
-    float gain = static_cast<float>(display_.exposure_gain);
-    if (ImGui::SliderFloat("gain", &gain, 0.05f, 20.0f, "%.2f", ImGuiSliderFlags_Logarithmic | ImGuiSliderFlags_AlwaysClamp)) {
-        display_.exposure_gain = gain;
-        beauty_dirty_ = true;
-    }
-    int cmap = static_cast<int>(display_.colormap);
-    if (ImGui::Combo("colour map", &cmap, "inferno\0viridis\0grey\0")) display_.colormap = static_cast<view::ColorMap>(cmap);
-    ImGui::Separator();
-    // Numbers.
-    const view::RenderTiming& t = s.timing();
-    ImGui::Text("frame %.2f ms median of %zu (update %.2f, render %.2f)", t.median_frame_ms, t.samples, t.update_ms, t.render_ms);
-    ImGui::TextDisabled("prepare %.1f ms; viewer overhead %.2f ms", t.prepare_ms, overhead_ms_.empty() ? 0.0 : overhead_ms_.back());
-    for (const auto& [stage, ms] : s.output().stages_ms) ImGui::BulletText("%s %.2f ms", stage.c_str(), ms);
-    if (!s.output().health.counters.empty() && ImGui::TreeNode("health")) {
-        for (const auto& [name, n] : s.output().health.counters) ImGui::Text("%s %lld", name.c_str(), static_cast<long long>(n));
-        ImGui::TreePop();
-    }
-    const view::LiveErrors& e = s.errors();
-    ImGui::Text("truth: %s", e.truth_kind.empty() ? "(none yet)" : e.truth_kind.c_str());
-    if (s.status() != "ok") ImGui::TextColored(ImVec4(1, 0.4f, 0.4f, 1), "%s", s.status().c_str());
-    error_line("receiver", e.receiver);
-    error_line("camera", e.camera);
-    if (!s.output().camera_volume.empty()) error_line("volume", e.volume);
-    const view::ProgressiveStatus st = s.reference_status();
-    ImGui::Text("reference %.3g / %.3g photons%s", static_cast<double>(st.photons), static_cast<double>(st.target),
-                st.from_cache ? " (cache)" : "");
-    if (st.photons_per_second > 0.0) ImGui::TextDisabled("  %d rounds, %.3g photons/s%s", st.rounds, st.photons_per_second, st.done ? ", done" : "");
-    if (!st.error.empty()) ImGui::TextColored(ImVec4(1, 0.4f, 0.4f, 1), "%s", st.error.c_str());
     ImGui::Separator();
     // Record.
     if (ImGui::Button("render command")) {

@@ -58,6 +58,10 @@ Texture::~Texture() {
 Viewer::Viewer(const ViewerOptions& options) : options_(options) {
     session_ = std::make_unique<view::Session>(options.session);
     if (scene_scatters(session_->scene())) space_ = view::Space::Volume;
+    if (options.space == "receiver") space_ = view::Space::Receiver;
+    if (options.space == "camera") space_ = view::Space::Camera;
+    if (options.space == "volume") space_ = view::Space::Volume;
+    split_ = options.split;
 }
 
 std::vector<view::ViewKind> Viewer::visible() const {
@@ -85,7 +89,8 @@ void Viewer::step() {
 }
 
 void Viewer::rebuild_panes() {
-    if (beauty_dirty_ && session_->rendered() && !split_) {
+    const bool beauty_visible = !split_;
+    if (beauty_visible && session_->rendered() && (beauty_dirty_ || beauty_generation_ != session_->generation())) {
         Stopwatch clock;
         const SceneFrame& sf = session_->scene_frame();
         BeautyInputs in;
@@ -95,17 +100,25 @@ void Viewer::rebuild_panes() {
         in.receiver_ec = &session_->output().receiver;
         in.samples_per_axis = 1;
         beauty_ = render_beauty(sf.tracer(), in);
+        beauty_pane_ = view::make_pane(*session_, view::ViewKind::Beauty, display_, &beauty_);
         beauty_ms_ = clock.ms();
         beauty_dirty_ = false;
+        beauty_generation_ = session_->generation();
+        beauty_uploaded_ = false;
     }
     Stopwatch clock;
     panes_.clear();
-    for (view::ViewKind k : visible()) panes_.push_back(view::make_pane(*session_, k, display_, &beauty_));
+    const std::vector<view::ViewKind> kinds = visible();
+    const view::SpaceMappings mappings = view::space_mappings(*session_, space_, display_);
+    for (view::ViewKind k : kinds)
+        panes_.push_back(k == view::ViewKind::Beauty ? beauty_pane_ : view::make_pane(*session_, k, display_, nullptr, &mappings));
     textures_.resize(std::max(textures_.size(), panes_.size()));
     for (std::size_t i = 0; i < panes_.size(); ++i) {
         if (!textures_[i]) textures_[i] = std::make_unique<Texture>();
-        if (panes_[i].available)
-            textures_[i]->upload(panes_[i].rgba, panes_[i].width, panes_[i].height, panes_[i].kind != view::ViewKind::Beauty);
+        const bool beauty = panes_[i].kind == view::ViewKind::Beauty;
+        if (!panes_[i].available || (beauty && beauty_uploaded_)) continue;
+        textures_[i]->upload(panes_[i].rgba, panes_[i].width, panes_[i].height, !beauty);
+        if (beauty) beauty_uploaded_ = true;
     }
     push_window(upload_ms_, clock.ms());
 }

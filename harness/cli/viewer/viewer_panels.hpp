@@ -37,6 +37,7 @@ public:
     view::Session& session() { return *session_; }
     void step();                           // animation, update + render, panes to textures
     void draw(int width, int height);      // the ImGui windows
+    bool idle() const { return !continuous_ && !playing_ && !dirty_; }
     // A window frame's time and the part of it spent drawing (ImGui's draw lists through OpenGL, finished).
     void record_frame_time(double ms, double draw_ms);
     // The window as PNG, and FILE.json: panes (position, size, mapping), timings, reference.
@@ -63,6 +64,9 @@ private:
     float split_at_ = 0.5f;
     bool playing_ = false, continuous_ = true, dirty_ = true, beauty_dirty_ = true;
     Image beauty_;
+    view::Pane beauty_pane_;
+    std::uint64_t beauty_generation_ = 0;
+    bool beauty_uploaded_ = false;
     double beauty_ms_ = 0.0;
     std::vector<view::Pane> panes_;
     std::vector<std::unique_ptr<Texture>> textures_;
