@@ -221,3 +221,38 @@ TEST(ViewSession, PanesReadoutAndRecordOnSine) {
 
 }  // namespace
 }  // namespace caustics
+
+namespace caustics {
+namespace {
+
+// Scrubbing: a frame change abandons the old frame's reference without waiting for it, and the new
+// frame's reference reaches its photons; while playing (no reference) none is started until asked.
+TEST(ViewSession, FrameChangesAbandonTheOldReferenceAndStartTheNewOne) {
+    view::SessionOptions o;
+    o.scene = "pool";
+    o.frame = 10;
+    o.progressive.reference.photons = 16'000;
+    o.progressive.reference.progress = false;
+    o.progressive.first_round = 2'000;
+    o.progressive.cache_dir = "";   // computed here, never cached
+    view::Session s(o);
+    EXPECT_EQ(s.frame_count(), 120);
+    s.set_frame(11);
+    s.set_frame(12, false);   // playing: no reference
+    EXPECT_EQ(s.progressive(), nullptr);
+    s.ensure_reference();
+    ASSERT_NE(s.progressive(), nullptr);
+    s.set_frame(500);         // clamped to the last frame
+    EXPECT_EQ(s.frame(), 119);
+    s.wait_for_reference();
+    const auto r = s.reference();
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->photons, s.reference_status().target);
+    EXPECT_GT(s.reference_status().rounds, 1);
+    s.render();
+    ASSERT_TRUE(s.errors().receiver.has_value());
+    EXPECT_EQ(s.errors().photons, r->photons);
+}
+
+}  // namespace
+}  // namespace caustics

@@ -24,7 +24,7 @@ Command make_view_command() {
             std::string scene, method, screenshot, cache;
             std::vector<std::string> sets;
             int frame = 0, frames = 1;
-            bool wait_reference = false, no_reference = false, split = false;
+            bool wait_reference = false, no_reference = false, split = false, play = false;
             std::string space;
             ReferenceSettings reference{.photons = 4'000'000};
         };
@@ -42,6 +42,7 @@ Command make_view_command() {
         app.add_option("--space", a->space, "the panes' space to start with (default: volume where the medium scatters, else receiver)")
             ->check(CLI::IsMember({"receiver", "camera", "volume"}));
         app.add_flag("--split", a->split, "start in the split view (method | reference)");
+        app.add_flag("--play", a->play, "start playing the animation (each window frame: the next scene frame, update + render)");
         app.add_flag("--wait-reference", a->wait_reference, "the screenshot waits for the final reference");
         return [a]() -> int {
 #ifdef CAUSTICS_HAVE_VIEWER
@@ -58,6 +59,7 @@ Command make_view_command() {
             o.wait_reference = a->wait_reference;
             o.space = a->space;
             o.split = a->split;
+            o.play = a->play;
             return viewer::run_viewer(o);
 #else
             throw InputError("view", "", "this build has no viewer (CAUSTICS_BUILD_VIEWER is off: GLFW, OpenGL or Dear ImGui was "

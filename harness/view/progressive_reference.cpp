@@ -78,6 +78,8 @@ std::vector<std::uint64_t> ProgressiveReference::round_photons() const {
     return rounds_;
 }
 
+void ProgressiveReference::cancel() { cancel_ = true; }
+
 void ProgressiveReference::wait() {
     if (thread_.joinable()) thread_.join();
 }

@@ -65,7 +65,8 @@ public:
     ProgressiveStatus status() const;
     // Photon totals of every published round, in order.
     std::vector<std::uint64_t> round_photons() const;
-    void wait();   // until done (tests, --screenshot with a reference)
+    void wait();     // until done (tests, --screenshot with a reference)
+    void cancel();   // stop after the current round, without waiting (status().done then)
 
 private:
     void run();

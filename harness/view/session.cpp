@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <utility>
 #include <cmath>
 
 #include <caustics/api/registry.hpp>
@@ -67,47 +68,73 @@ Session::Session(SessionOptions options) : options_(std::move(options)) {
 Session::~Session() = default;
 
 void Session::make_method() {
-    method_ = params_->info().create(params_->params());
+    // Made and prepared aside, so that a refusal (an exception) leaves the previous instance in place.
+    std::unique_ptr<Method> method = params_->info().create(params_->params());
     Stopwatch clock;
-    method_->prepare(scene());
+    method->prepare(scene());
+    const double prepare_ms = clock.ms();
+    method_ = std::move(method);
+    accepted_ = std::make_unique<ParamModel>(*params_);
     timing_ = {};
-    timing_.prepare_ms = clock.ms();
+    timing_.prepare_ms = prepare_ms;
     frame_times_.clear();
     rendered_ = false;
     ++generation_;
 }
 
 void Session::start_reference() {
-    progressive_.reset();   // waits for the old frame's current round
     reference_.reset();
     errors_ = {};
+    measured_at_s_ = -1.0;   // measure again at the next render
     if (options_.reference) progressive_ = std::make_unique<ProgressiveReference>(*frame_, options_.progressive);
 }
 
-void Session::set_frame(int frame) {
+void Session::ensure_reference() {
+    if (!progressive_ && options_.reference) start_reference();
+}
+
+void Session::set_frame(int frame, bool with_reference) {
     frame = std::clamp(frame, 0, frame_count() - 1);
     if (frame == frame_index_) return;
-    progressive_.reset();   // it reads the old SceneFrame
     Scene scene = frame_->scene();
-    frame_.reset();
+    // The old frame's reference finishes its current round in the background (it reads the old
+    // SceneFrame, which goes with it) instead of holding the window up.
+    if (progressive_) {
+        progressive_->cancel();
+        retired_.push_back({std::move(frame_), std::move(progressive_)});
+    }
     frame_ = std::make_unique<SceneFrame>(std::move(scene), frame);
     frame_index_ = frame;
     analytic_ = analytic_truth(frame_->geometry(), frame_->chart());
     ++generation_;
-    start_reference();
+    reference_.reset();
+    errors_ = {};
+    if (with_reference) start_reference();
+    std::erase_if(retired_, [](const Retired& r) { return r.reference->status().done; });
 }
 
 void Session::set_method(const std::string& name) {
     const MethodInfo& info = require_method(name);
     for (const MethodChoice& c : methods_)
         if (c.name == name && !c.supported) throw InputError("--method", "", name + " does not support this scene: " + c.reason);
-    params_ = std::make_unique<ParamModel>(info);
-    make_method();
+    std::unique_ptr<ParamModel> previous = std::exchange(params_, std::make_unique<ParamModel>(info));
+    try {
+        make_method();
+    } catch (...) {
+        params_ = std::move(previous);
+        throw;
+    }
     errors_ = {};
 }
 
 void Session::parameters_changed() {
-    make_method();
+    // A refused set (create or prepare threw) goes back to the last one the method accepted.
+    try {
+        make_method();
+    } catch (...) {
+        *params_ = *accepted_;
+        throw;
+    }
     errors_ = {};
 }
 
@@ -168,7 +195,8 @@ void Session::refresh_errors(bool force) {
     if (progressive_) reference_ = progressive_->latest();
     const std::uint64_t photons = reference_ ? reference_->photons : 0;
     const double now = std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-    if (!force && rendered_ && measured_generation_ == generation_ && measured_photons_ == photons && now - measured_at_s_ < 0.5)
+    if (!force && rendered_ && measured_at_s_ >= 0.0 && measured_generation_ == generation_ && measured_photons_ == photons &&
+        now - measured_at_s_ < 0.5)
         return;
     measured_generation_ = generation_;
     measured_photons_ = photons;

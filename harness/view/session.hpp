@@ -69,9 +69,14 @@ public:
     const ParamModel& params() const { return *params_; }
     ParamModel& params() { return *params_; }
 
-    void set_frame(int frame);                       // clamps into the animation; new reference
+    // Clamps into the animation. The new frame's reference starts unless `with_reference` is false
+    // (while the animation plays: ensure_reference() starts it once it stops).
+    void set_frame(int frame, bool with_reference = true);
+    void ensure_reference();
     void set_method(const std::string& name);        // defaults of its table; InputError when unsupported
-    void parameters_changed();                       // after a ParamModel setter returned true
+    // After a ParamModel setter returned true: a new instance with the new parameters. If the method
+    // refuses them (create or prepare throws), the model returns to the accepted set and it rethrows.
+    void parameters_changed();
 
     // One update + render of the current frame (timed), then the errors against the newest reference.
     void render();
@@ -110,6 +115,7 @@ private:
     int frame_index_ = 0;
     std::vector<MethodChoice> methods_;
     std::unique_ptr<ParamModel> params_;
+    std::unique_ptr<ParamModel> accepted_;   // the parameters of the current method instance
     std::unique_ptr<Method> method_;
     bool prepared_for_frame_ = false;
     CausticOutput output_;
@@ -119,6 +125,12 @@ private:
     std::deque<double> frame_times_;
     AnalyticTruth analytic_;
     std::unique_ptr<ProgressiveReference> progressive_;
+    // Abandoned references still finishing a round, each with the frame it reads (destroyed first).
+    struct Retired {
+        std::unique_ptr<SceneFrame> frame;
+        std::unique_ptr<ProgressiveReference> reference;
+    };
+    std::vector<Retired> retired_;
     std::shared_ptr<const ReferenceResult> reference_;
     LiveErrors errors_;
     std::uint64_t generation_ = 1, measured_generation_ = 0, measured_photons_ = 0;

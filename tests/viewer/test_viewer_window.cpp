@@ -1,7 +1,8 @@
 // The viewer's window (harness/cli/viewer), through the program: without a display it exits 2 with one
 // message naming xvfb-run, before any other work; under xvfb-run (registered only where xvfb-run exists)
 // its screenshot's method pane shows the receiver map `caustics render` writes for the same settings,
-// through the same colour map, pixel for pixel within 8-bit quantisation.
+// through the same colour map, pixel for pixel within 8-bit quantisation, and playing advances the
+// animation one scene frame per window frame.
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -107,6 +108,21 @@ TEST(ViewerWindow, ScreenshotMethodPaneMatchesTheRenderedReceiverMap) {
         }
     EXPECT_LE(worst, 1) << "pane pixels differ from the rendered receiver map";
     EXPECT_GT(colours.size(), 32u) << "the method pane is blank";
+}
+
+// Play: each window frame moves to the next scene frame and runs update + render there.
+TEST(ViewerWindow, PlayAdvancesOneSceneFramePerWindowFrame) {
+    ScopedTempDir dir("viewer_play");
+    std::filesystem::create_directories(dir.path());
+    const std::string shot = (dir.path() / "play.png").string();
+    const ProgramResult v = test_support::run_program(
+        CAUSTICS_XVFB_RUN, {"-a", CAUSTICS_BINARY, "view", "pool", "--method", "caustic_triangles", "--frame", "3", "--play",
+                            "--screenshot", shot, "--frames", "4", "--no-reference"},
+        dir.path());
+    ASSERT_EQ(v.code, 0) << v.err;
+    const nlohmann::json side = nlohmann::json::parse(test_support::slurp(shot + ".json"));
+    EXPECT_EQ(side["frame"], 7);
+    EXPECT_EQ(side["frames"], 4);
 }
 #endif
 

@@ -15,6 +15,7 @@ struct ViewerOptions {
     int width = 1024, height = 768;
     std::string space;            // receiver | camera | volume; empty: volume on a scattering scene, else receiver
     bool split = false;           // start in the split view
+    bool play = false;            // start playing the animation (one scene frame per window frame)
 };
 
 // Exit code: 0, or 2 when there is no display (one message on stderr, before any other work).

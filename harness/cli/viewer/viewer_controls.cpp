@@ -30,6 +30,17 @@ void error_line(const char* label, const std::optional<ViewErrors>& e) {
 
 }  // namespace
 
+// A method that refuses its new parameters or scene (an exception from create or prepare) leaves the
+// window open: the message is shown and the previous instance keeps rendering.
+void Viewer::guarded(const std::function<void()>& action) {
+    try {
+        action();
+        message_.clear();
+    } catch (const std::exception& e) {
+        message_ = std::string("refused: ") + e.what();
+    }
+}
+
 void Viewer::controls() {
     view::Session& s = *session_;
     ImGui::PushItemWidth(-120.0f);   // room for the parameter names
@@ -55,7 +66,7 @@ void Viewer::controls() {
         for (const view::MethodChoice& c : s.methods()) {
             ImGui::BeginDisabled(!c.supported);
             if (ImGui::Selectable(c.name.c_str(), c.name == s.method_name()) && c.name != s.method_name()) {
-                s.set_method(c.name);
+                guarded([&] { s.set_method(c.name); });
                 beauty_dirty_ = dirty_ = true;
             }
             ImGui::EndDisabled();
@@ -144,7 +155,7 @@ void Viewer::controls() {
         tooltip(w.doc + (w.declared_unbounded ? "\n(slider span chosen: the table's range is unbounded; use --set beyond it)" : ""));
     }
     if (changed) {
-        s.parameters_changed();
+        guarded([&] { s.parameters_changed(); });
         beauty_dirty_ = dirty_ = true;
     }
     ImGui::Separator();

@@ -62,6 +62,7 @@ Viewer::Viewer(const ViewerOptions& options) : options_(options) {
     if (options.space == "camera") space_ = view::Space::Camera;
     if (options.space == "volume") space_ = view::Space::Volume;
     split_ = options.split;
+    playing_ = options.play;
 }
 
 std::vector<view::ViewKind> Viewer::visible() const {
@@ -76,9 +77,10 @@ std::vector<view::ViewKind> Viewer::visible() const {
 
 void Viewer::step() {
     if (playing_ && session_->frame_count() > 1) {
-        session_->set_frame((session_->frame() + 1) % session_->frame_count());
+        session_->set_frame((session_->frame() + 1) % session_->frame_count(), false);
         beauty_dirty_ = true;
     }
+    if (!playing_) session_->ensure_reference();
     if (continuous_ || dirty_ || !session_->rendered()) {
         session_->render();
         dirty_ = false;

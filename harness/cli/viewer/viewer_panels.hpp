@@ -3,6 +3,7 @@
 // numbers, record) and the panes, with their textures.
 #include <array>
 #include <deque>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -50,6 +51,7 @@ public:
 
 private:
     void rebuild_panes();
+    void guarded(const std::function<void()>& action);
     void controls();
     void draw_panes(float x, float y, float w, float h);
     void place(std::size_t index, float x, float y, float w, float h, float u0 = 0.0f, float u1 = 1.0f);
