@@ -213,7 +213,7 @@ void Viewer::draw_panes(float x, float y, float w, float h) {
         // Method left of the split, reference right of it, one image (Falcor's split screen).
         const std::size_t m = 1, r = 2;
         if (!panes_[m].available || !panes_[r].available) {
-            place(panes_[m].available ? r : m, x, y, w, h);
+            place(panes_[m].available ? m : r, x, y, w, h);   // the one there is (or why neither)
             return;
         }
         const float iw = static_cast<float>(panes_[m].width), ih = static_cast<float>(panes_[m].height);
