@@ -31,7 +31,8 @@ ALLOWED = {
     "sweep": BASE + ["scene", "frame", "api", "reference", "run", "sweep"],
     "synth": BASE + ["scene", "frame", "api", "reference", "run", "synth"],
     "report": BASE + ["report"],
-    "cli": BASE + ["scene", "frame", "api", "reference", "run", "sweep", "synth", "report"],
+    "view": BASE + ["scene", "frame", "api", "reference", "run", "view"],
+    "cli": BASE + ["scene", "frame", "api", "reference", "run", "sweep", "synth", "report", "view"],
     "method": BASE + ["scene", "frame", "api", "blocks"],
     "method_tests": BASE + ["scene", "frame", "api", "blocks", "reference", "run", "sweep", "synth", "report"],
 }

@@ -1,0 +1,31 @@
+# The optional viewer (`caustics view`, harness/cli/viewer): GLFW, OpenGL and Dear ImGui (Debian's
+# libimgui-dev: a static library with the GLFW and OpenGL 3 back ends, and imgui.pc). The option is on
+# when all three are found; asking for it without them is an error naming what is missing.
+find_package(glfw3 3.3 QUIET)
+set(OpenGL_GL_PREFERENCE GLVND)
+find_package(OpenGL QUIET)
+pkg_check_modules(IMGUI QUIET IMPORTED_TARGET imgui)
+set(caustics_viewer_missing "")
+if(NOT TARGET glfw)
+  list(APPEND caustics_viewer_missing "GLFW 3.3 (libglfw3-dev)")
+endif()
+if(NOT TARGET OpenGL::GL)
+  list(APPEND caustics_viewer_missing "OpenGL (libgl-dev)")
+endif()
+if(NOT IMGUI_FOUND)
+  list(APPEND caustics_viewer_missing "Dear ImGui (libimgui-dev)")
+endif()
+if(caustics_viewer_missing)
+  set(caustics_viewer_default OFF)
+else()
+  set(caustics_viewer_default ON)
+endif()
+option(CAUSTICS_BUILD_VIEWER "Build the interactive viewer, caustics view (GLFW, OpenGL 3.3, Dear ImGui)"
+       ${caustics_viewer_default})
+if(CAUSTICS_BUILD_VIEWER AND caustics_viewer_missing)
+  message(FATAL_ERROR "CAUSTICS_BUILD_VIEWER is on but these were not found: ${caustics_viewer_missing} "
+                      "(scripts/setup.sh installs them)")
+endif()
+if(NOT CAUSTICS_BUILD_VIEWER)
+  message(STATUS "caustics view: not built (missing: ${caustics_viewer_missing})")
+endif()
