@@ -9,6 +9,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <caustics/blocks/raster/raster.hpp>
+
 namespace caustics::adaptive_beams {
 namespace {
 
@@ -221,7 +223,7 @@ void accumulate_receiver(const BeamSet& set, const Scene& scene, const ReceiverC
     std::vector<Box> box(nb);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nb, 64), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t n = r.begin(); n != r.end(); ++n) {
-            if (!(set.ends[n] & kEndsOnReceiver)) continue;
+            if (!(set.ends[n] & kEndsOnReceiver) || (set.ends[n] & kAllOnReceiver)) continue;
             const Beam& b = set.beams[n];
             double slo = 1e300, shi = -1e300, tlo = 1e300, thi = -1e300;
             for (int i = 0; i < 3; ++i) {
@@ -238,7 +240,44 @@ void accumulate_receiver(const BeamSet& set, const Scene& scene, const ReceiverC
             bx.y1 = std::min(H - 1, static_cast<int>(std::floor((thi + gt) * H)));
         }
     });
+    // Beams that end on the receiver with all three edges deposit the flux they bring over their end
+    // section (the triangle of their edges' hits), split among the bins by exact area coverage: flux is
+    // conserved however small the section (a beam focused on the receiver), where point samples of
+    // Phi / |A| hit or miss it (on `sphere` 3 x 3 samples per bin lost 40 % of the flux in the focus bin).
+    // The others (partly on another surface) are point-sampled below.
+    std::vector<glm::vec2> positions;
+    std::vector<glm::uvec3> triangles;
+    std::vector<float> values;
+    for (std::size_t n = 0; n < nb; ++n) {
+        if (!(set.ends[n] & kAllOnReceiver)) continue;
+        const Beam& b = set.beams[n];
+        const double sigma_t = medium_at(scene, b.medium).extinction();
+        double arriving = 0.0;
+        const auto base = static_cast<unsigned>(positions.size());
+        for (int i = 0; i < 3; ++i) {
+            double u = 0.0, v = 0.0;
+            chart.coords(b.point(i, b.ye[i]), u, v);
+            positions.emplace_back(static_cast<float>(u * W), static_cast<float>(v * H));
+            arriving += b.w[i] * std::exp(-sigma_t * (b.ye[i] - b.ys[i]) * glm::length(b.dp[i])) / 3.0;
+        }
+        triangles.emplace_back(base, base + 1, base + 2);
+        values.push_back(static_cast<float>(b.flux * arriving));
+    }
+    {
+        TriangleRaster raster;
+        RasterOptions options;
+        options.coverage = RasterCoverage::Area;
+        raster.draw({positions, triangles, values, {}}, options, receiver);
+        for (int y = 0; y < H; ++y)
+            for (int x = 0; x < W; ++x) receiver.at(x, y) = static_cast<float>(receiver.at(x, y) / chart.bin_area(x, y));
+    }
     const int ss = std::max(1, s.receiver_samples);
+    // Sample positions in a bin: the R2 sequence (Roberts 2018), stratified and with irrational offsets, so
+    // that no sample lies exactly on a beam's side shared by two beams (counted twice) on symmetric grids.
+    std::vector<glm::dvec2> offsets(static_cast<std::size_t>(ss * ss));
+    for (int k = 0; k < ss * ss; ++k)
+        offsets[static_cast<std::size_t>(k)] = {std::fmod(0.5 + 0.7548776662466927 * (k + 1), 1.0),
+                                                std::fmod(0.5 + 0.5698402909980532 * (k + 1), 1.0)};
     const int bands = (H + kBandRows - 1) / kBandRows;
     std::vector<std::int64_t> clamp(static_cast<std::size_t>(bands), 0);
     tbb::parallel_for(tbb::blocked_range<int>(0, bands, 1), [&](const tbb::blocked_range<int>& br) {
@@ -253,12 +292,11 @@ void accumulate_receiver(const BeamSet& set, const Scene& scene, const ReceiverC
                 for (int y = std::max(r0, bx.y0); y <= std::min(r1, bx.y1); ++y)
                     for (int x = bx.x0; x <= bx.x1; ++x) {
                         double sum = 0.0;
-                        for (int bj = 0; bj < ss; ++bj)
-                            for (int bi = 0; bi < ss; ++bi) {
-                                const double u = (x + (bi + 0.5) / ss) / W, v = (y + (bj + 0.5) / ss) / H;
-                                sum += surface_irradiance(b, sigma_t, chart.point(u, v), chart.normal(u, v), false,
-                                                          s.end_tol, counters);
-                            }
+                        for (std::size_t k = 0; k < offsets.size(); ++k) {
+                            const double u = (x + offsets[k].x) / W, v = (y + offsets[k].y) / H;
+                            sum += surface_irradiance(b, sigma_t, chart.point(u, v), chart.normal(u, v), false,
+                                                      s.end_tol, counters);
+                        }
                         receiver.at(x, y) += static_cast<float>(sum / (ss * ss));
                     }
             }

@@ -202,7 +202,11 @@ BeamSet LightGrid::generate() const {
             Beam b;
             if (make_beam(edges, flux, p[0]->medium[k], s_.clamp_ratio, b) != BeamStatus::Ok) { ++tb.degenerate; continue; }
             const MediumCoefficients mc = medium_at(scene, b.medium);
-            tb.min_ratio = std::min(tb.min_ratio, min_area_ratio(b));
+            {
+                // Concentration where the beam ends (the receiver): its end section against its start.
+                const double ys = (b.ys[0] + b.ys[1] + b.ys[2]) / 3.0, ye = (b.ye[0] + b.ye[1] + b.ye[2]) / 3.0;
+                tb.min_ratio = std::min(tb.min_ratio, std::abs(b.area(ye)) / std::abs(b.area(ys)));
+            }
             if (!cut_by_energy(b, mc.extinction(), s_.energy_cutoff)) { ++tb.energy; continue; }
             tb.flipped += b.flipped;
             // The oracle's camera term: the closest point to the camera on the central ray (Sec. 4.2).
@@ -215,7 +219,10 @@ BeamSet LightGrid::generate() const {
             const double width = std::sqrt(2.0 * std::max(std::abs(b.area(y)), b.a_min));
             tb.max_view_angle = std::max(tb.max_view_angle, width / std::max(glm::length(x - camera), 1e-9));
             tb.beams.push_back(b);
-            std::uint8_t ends = 0;
+            std::uint8_t ends = kAllOnReceiver;
+            for (const LightPath* q : p) {
+                if (q->end_object[static_cast<std::size_t>(k)] != scene.receiver.object_index) ends = 0;
+            }
             for (const LightPath* q : p) {
                 const int e = q->end_object[static_cast<std::size_t>(k)];
                 if (e >= 0 && !scene.objects[static_cast<std::size_t>(e)].material.is_specular()) ends |= kEndsOnDiffuse;
@@ -229,10 +236,12 @@ BeamSet LightGrid::generate() const {
         const int size = s0 >> level;
         // Trace the corners not traced yet, in lattice order (the result does not depend on the threads).
         std::vector<std::uint64_t> need;
+        // Cells that may split also need their edge midpoints and centre (the deviation test).
+        const int step = level < max_level ? 1 : 2;
         for (const Cell& c : cells)
-            for (int dj = 0; dj <= 1; ++dj)
-                for (int di = 0; di <= 1; ++di) {
-                    const std::uint64_t k = key(c.i + di * size, c.j + dj * size);
+            for (int dj = 0; dj <= 2; dj += step)
+                for (int di = 0; di <= 2; di += step) {
+                    const std::uint64_t k = key(c.i + di * size / 2, c.j + dj * size / 2);
                     if (!index.count(k)) need.push_back(k);
                 }
         std::sort(need.begin(), need.end());
@@ -273,13 +282,39 @@ BeamSet LightGrid::generate() const {
                     if (proj_.type == ProjectionType::Perspective) width *= 0.5 * (dmin + dmax);
                     split = dmax - dmin > s_.depth_threshold * width || cmin < cos_normal;
                 }
+                if (!split && p[0]->segments > 0) {
+                    // The light's hits at the cell's edge midpoints and centre against the bilinear beam's
+                    // (Sec. 6: "the difference of photon hits at beam edges"): where the ray map is not
+                    // linear over the cell, one beam misplaces the caustic.
+                    const int h = size / 2;
+                    const glm::ivec2 mid[5] = {{c.i + h, c.j}, {c.i + size, c.j + h}, {c.i + h, c.j + size}, {c.i, c.j + h},
+                                               {c.i + h, c.j + h}};
+                    const int last = p[0]->segments - 1;
+                    auto end = [&](const LightPath& lp) {
+                        const EdgeRay& e = lp.seg[static_cast<std::size_t>(last)];
+                        return e.start + e.length * e.dir;
+                    };
+                    const glm::dvec3 e0 = end(*p[0]), e1 = end(*p[1]), e2 = end(*p[2]), e3 = end(*p[3]);
+                    const glm::dvec3 predicted[5] = {0.5 * (e0 + e1), 0.5 * (e1 + e2), 0.5 * (e2 + e3), 0.5 * (e3 + e0),
+                                                     0.25 * (e0 + e1 + e2 + e3)};
+                    const double extent = std::max(glm::length(e2 - e0), glm::length(e3 - e1));
+                    for (int k = 0; k < 5 && !split; ++k) {
+                        const LightPath& m = paths[static_cast<std::size_t>(index.at(key(mid[k].x, mid[k].y)))];
+                        if (!same_structure(*p[0], m)) split = true;
+                        else split = glm::length(end(m) - predicted[k]) > s_.deviation * extent;
+                    }
+                }
                 if (!split) {
-                    // Convergent beams by energy, and beams wide as seen from the camera.
+                    // Convergent beams by energy (a beam at level L carries 4^-L of an initial cell's light:
+                    // its concentration where it ends is weighed against focus_ratio 4^L; the minimum over
+                    // its length would split every beam that passes a focus, to the last level), and beams
+                    // wide as seen from the camera.
                     TriBeams tb;
                     const glm::ivec2 t0[3] = {q[0], q[1], q[2]}, t1[3] = {q[0], q[2], q[3]};
                     make_triangle(t0, tb);
                     make_triangle(t1, tb);
-                    split = tb.min_ratio < 1.0 / s_.focus_ratio || tb.max_view_angle > s_.camera_angle;
+                    split = tb.min_ratio * s_.focus_ratio * std::ldexp(1.0, 2 * level) < 1.0 ||
+                            tb.max_view_angle > s_.camera_angle;
                 }
                 action[n] = split ? 2 : 1;
             }
@@ -297,16 +332,43 @@ BeamSet LightGrid::generate() const {
         cells.swap(next);
     }
 
-    // The leaves' beams, in leaf order.
+    // The leaves' beams, in leaf order. A leaf whose neighbour was refined further has that neighbour's
+    // corners on its side (T-junctions): it is then cut into a fan around its centre through every such
+    // corner, so that neighbouring beams share their edge rays and the beams tile the light without
+    // cracks or overlaps (otherwise the bilinear sides of a coarse beam and of its finer neighbours part
+    // where the ray map bends, and light is lost or counted twice).
+    std::unordered_map<std::uint64_t, char> corner;
+    for (const Cell& c : leaves) {
+        const int size = s0 >> c.level;
+        for (int dj = 0; dj <= 1; ++dj)
+            for (int di = 0; di <= 1; ++di) corner.emplace(key(c.i + di * size, c.j + dj * size), 1);
+    }
     std::vector<TriBeams> per(leaves.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size(), 16), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t n = r.begin(); n != r.end(); ++n) {
             const Cell& c = leaves[n];
             const int size = s0 >> c.level;
             const glm::ivec2 q[4] = {{c.i, c.j}, {c.i + size, c.j}, {c.i + size, c.j + size}, {c.i, c.j + size}};
-            const glm::ivec2 t0[3] = {q[0], q[1], q[2]}, t1[3] = {q[0], q[2], q[3]};
-            make_triangle(t0, per[n]);
-            make_triangle(t1, per[n]);
+            std::vector<glm::ivec2> ring;
+            for (int side = 0; side < 4; ++side) {
+                const glm::ivec2 a = q[side], b = q[(side + 1) % 4], step = (b - a) / size;
+                ring.push_back(a);
+                for (int t = 1; t < size; ++t) {
+                    const glm::ivec2 v = a + t * step;
+                    if (corner.count(key(v.x, v.y))) ring.push_back(v);
+                }
+            }
+            if (ring.size() == 4) {
+                const glm::ivec2 t0[3] = {q[0], q[1], q[2]}, t1[3] = {q[0], q[2], q[3]};
+                make_triangle(t0, per[n]);
+                make_triangle(t1, per[n]);
+                continue;
+            }
+            const glm::ivec2 centre{c.i + size / 2, c.j + size / 2};   // traced: the leaf could have split
+            for (std::size_t k = 0; k < ring.size(); ++k) {
+                const glm::ivec2 t[3] = {centre, ring[k], ring[(k + 1) % ring.size()]};
+                make_triangle(t, per[n]);
+            }
         }
     });
     st.cells = static_cast<std::int64_t>(leaves.size());

@@ -7,8 +7,9 @@
 // depth and object, Sec. 4.1), the refraction or reflection there and, inside a closed dielectric, the
 // second refraction on the way out (two-sided refraction, Sec. 6), up to the first diffuse surface or the
 // extrusion limit. A cell is split (Sec. 4.2) where its corners disagree (silhouette, another object,
-// total internal reflection), where depth or normal jump, where its beam converges by more than
-// `focus_ratio`, and where the beam is wide as seen from the camera.
+// total internal reflection), where depth or normal jump, where the light's hits at its edge midpoints
+// leave the bilinear beam (Sec. 6), where its beam converges strongly for its share of the light, and
+// where the beam is wide as seen from the camera.
 #include <array>
 #include <cstdint>
 #include <memory>
@@ -25,7 +26,7 @@
 namespace caustics::adaptive_beams {
 
 constexpr int kMaxSegments = 3;
-constexpr std::uint8_t kEndsOnDiffuse = 1, kEndsOnReceiver = 2;
+constexpr std::uint8_t kEndsOnDiffuse = 1, kEndsOnReceiver = 2, kAllOnReceiver = 4;
 
 // One light ray followed through the specular objects (a vertex of the projected grid).
 struct LightPath {
@@ -46,7 +47,8 @@ struct GridSettings {
     bool adaptive = true;            // false: the uniform grid x grid (no refinement)
     double depth_threshold = 2.0;    // split: depth jump across a cell > this x its width
     double normal_threshold_deg = 15.0;   // split: corner normals further apart than this
-    double focus_ratio = 4.0;        // split: the beam's cross-section shrinks below 1 / this of its start
+    double focus_ratio = 1.0;        // split: the beam's end section is below 1 / (this 4^level) of its start
+    double deviation = 0.05;         // split: a midpoint's hit is off the beam's by more than this x the cell's end size
     double camera_angle = 0.05;      // split: the beam's width seen from the camera [rad] above this
     double clamp_ratio = 1e-3;       // |A| >= this x the start area
     double energy_cutoff = 1e-3;     // extrusion ends (and faint beams are discarded) below this
@@ -60,7 +62,7 @@ struct GridStats {
 // The beams of one frame, ready to be accumulated.
 struct BeamSet {
     std::vector<Beam> beams;
-    std::vector<std::uint8_t> ends;   // per beam: kEndsOnDiffuse | kEndsOnReceiver where an edge ends there
+    std::vector<std::uint8_t> ends;   // per beam: kEndsOnDiffuse | kEndsOnReceiver where an edge ends there, kAllOnReceiver where all three do
     GridStats stats;
 };
 
