@@ -219,11 +219,66 @@ void accumulate_receiver(const BeamSet& set, const Scene& scene, const ReceiverC
     const int W = chart.width(), H = chart.height();
     receiver = Image(W, H);
     const std::size_t nb = set.beams.size();
+    // Beams that end on the receiver with all three edges deposit the flux they bring over their end
+    // section (the triangle of their edges' hits), split among the bins by exact area coverage: flux is
+    // conserved however small the section (a beam focused on the receiver), where point samples of
+    // Phi / |A| hit or miss it (on `sphere` 3 x 3 samples per bin lost 40 % of the flux in the focus bin).
+    // The others (partly on another surface) are point-sampled below.
+    std::vector<glm::vec2> positions;
+    std::vector<glm::uvec3> triangles;
+    std::vector<float> values;
+    // A plane receiver also takes the beams that leave its edge (each edge ends on it or on nothing): their
+    // edges are extended to its plane and the raster clips what falls outside it.
+    const glm::dvec3 plane_p = chart.point(0.5, 0.5), plane_n = chart.normal(0.5, 0.5);
+    std::vector<std::uint8_t> deposited(nb, 0);
+    for (std::size_t n = 0; n < nb; ++n) {
+        const std::uint8_t e = set.ends[n];
+        const bool all = e & kAllOnReceiver, extend = chart.is_plane() && (e & kEndsOnReceiver) && (e & kReceiverOrNothing);
+        if (!all && !extend) continue;
+        const Beam& b = set.beams[n];
+        const double sigma_t = medium_at(scene, b.medium).extinction();
+        double arriving = 0.0;
+        glm::dvec3 ends[3];
+        double lengths[3];
+        bool ok = true;
+        for (int i = 0; i < 3; ++i) {
+            const double stretch = glm::length(b.dp[i]);
+            ends[i] = b.point(i, b.ye[i]);
+            lengths[i] = (b.ye[i] - b.ys[i]) * stretch;
+            if (!all) {
+                const glm::dvec3 start = b.point(i, b.ys[i]), d = b.dp[i] / stretch;
+                const double dn = glm::dot(d, plane_n);
+                const double t = dn != 0.0 ? glm::dot(plane_p - start, plane_n) / dn : -1.0;
+                if (!(t > 0.0)) ok = false;
+                ends[i] = start + t * d;
+                lengths[i] = t;
+            }
+        }
+        if (!ok) continue;
+        deposited[n] = 1;
+        const auto base = static_cast<unsigned>(positions.size());
+        for (int i = 0; i < 3; ++i) {
+            double u = 0.0, v = 0.0;
+            chart.coords(ends[i], u, v);
+            positions.emplace_back(static_cast<float>(u * W), static_cast<float>(v * H));
+            arriving += b.w[i] * std::exp(-sigma_t * lengths[i]) / 3.0;
+        }
+        triangles.emplace_back(base, base + 1, base + 2);
+        values.push_back(static_cast<float>(b.flux * arriving));
+    }
+    {
+        TriangleRaster raster;
+        RasterOptions options;
+        options.coverage = RasterCoverage::Area;
+        raster.draw({positions, triangles, values, {}}, options, receiver);
+        for (int y = 0; y < H; ++y)
+            for (int x = 0; x < W; ++x) receiver.at(x, y) = static_cast<float>(receiver.at(x, y) / chart.bin_area(x, y));
+    }
     struct Box { int x0 = 0, x1 = -1, y0 = 0, y1 = -1; };
     std::vector<Box> box(nb);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nb, 64), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t n = r.begin(); n != r.end(); ++n) {
-            if (!(set.ends[n] & kEndsOnReceiver) || (set.ends[n] & kAllOnReceiver)) continue;
+            if (!(set.ends[n] & kEndsOnReceiver) || deposited[n]) continue;
             const Beam& b = set.beams[n];
             double slo = 1e300, shi = -1e300, tlo = 1e300, thi = -1e300;
             for (int i = 0; i < 3; ++i) {
@@ -240,37 +295,6 @@ void accumulate_receiver(const BeamSet& set, const Scene& scene, const ReceiverC
             bx.y1 = std::min(H - 1, static_cast<int>(std::floor((thi + gt) * H)));
         }
     });
-    // Beams that end on the receiver with all three edges deposit the flux they bring over their end
-    // section (the triangle of their edges' hits), split among the bins by exact area coverage: flux is
-    // conserved however small the section (a beam focused on the receiver), where point samples of
-    // Phi / |A| hit or miss it (on `sphere` 3 x 3 samples per bin lost 40 % of the flux in the focus bin).
-    // The others (partly on another surface) are point-sampled below.
-    std::vector<glm::vec2> positions;
-    std::vector<glm::uvec3> triangles;
-    std::vector<float> values;
-    for (std::size_t n = 0; n < nb; ++n) {
-        if (!(set.ends[n] & kAllOnReceiver)) continue;
-        const Beam& b = set.beams[n];
-        const double sigma_t = medium_at(scene, b.medium).extinction();
-        double arriving = 0.0;
-        const auto base = static_cast<unsigned>(positions.size());
-        for (int i = 0; i < 3; ++i) {
-            double u = 0.0, v = 0.0;
-            chart.coords(b.point(i, b.ye[i]), u, v);
-            positions.emplace_back(static_cast<float>(u * W), static_cast<float>(v * H));
-            arriving += b.w[i] * std::exp(-sigma_t * (b.ye[i] - b.ys[i]) * glm::length(b.dp[i])) / 3.0;
-        }
-        triangles.emplace_back(base, base + 1, base + 2);
-        values.push_back(static_cast<float>(b.flux * arriving));
-    }
-    {
-        TriangleRaster raster;
-        RasterOptions options;
-        options.coverage = RasterCoverage::Area;
-        raster.draw({positions, triangles, values, {}}, options, receiver);
-        for (int y = 0; y < H; ++y)
-            for (int x = 0; x < W; ++x) receiver.at(x, y) = static_cast<float>(receiver.at(x, y) / chart.bin_area(x, y));
-    }
     const int ss = std::max(1, s.receiver_samples);
     // Sample positions in a bin: the R2 sequence (Roberts 2018), stratified and with irrational offsets, so
     // that no sample lies exactly on a beam's side shared by two beams (counted twice) on symmetric grids.

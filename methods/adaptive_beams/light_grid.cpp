@@ -61,7 +61,7 @@ LightGrid::LightGrid(const FrameGeometry& frame, const RayTracer& tracer, const 
     offset_ = scene_ray_offset(frame);
 }
 
-void LightGrid::ray_at(int i, int j, glm::dvec3& origin, glm::dvec3& dir) const {
+void LightGrid::ray_at(double i, double j, glm::dvec3& origin, glm::dvec3& dir) const {
     const double px = i, py = j;
     if (proj_.type == ProjectionType::Orthographic) {
         const double tx = proj_.x0 + px / res_ * (proj_.x1 - proj_.x0);
@@ -74,7 +74,7 @@ void LightGrid::ray_at(int i, int j, glm::dvec3& origin, glm::dvec3& dir) const 
     }
 }
 
-LightPath LightGrid::trace(int i, int j) const {
+LightPath LightGrid::trace(double i, double j) const {
     const Scene& scene = *frame_.scene;
     LightPath lp;
     glm::dvec3 o, d;
@@ -145,11 +145,11 @@ LightPath LightGrid::trace(int i, int j) const {
     return lp;
 }
 
-double LightGrid::triangle_flux(const glm::ivec2& a, const glm::ivec2& b, const glm::ivec2& c) const {
+double LightGrid::triangle_flux(const glm::dvec2& a, const glm::dvec2& b, const glm::dvec2& c) const {
     const Light& light = frame_.scene->lights.at(0);
     if (proj_.type == ProjectionType::Orthographic) {
         const double sx = (proj_.x1 - proj_.x0) / res_, sy = (proj_.y1 - proj_.y0) / res_;
-        const glm::dvec2 u = glm::dvec2(b - a), v = glm::dvec2(c - a);
+        const glm::dvec2 u = b - a, v = c - a;
         return light.irradiance * 0.5 * std::abs(u.x * v.y - u.y * v.x) * sx * sy;
     }
     // Solid angle of the spherical triangle (Van Oosterom and Strackee 1983).
@@ -184,17 +184,9 @@ BeamSet LightGrid::generate() const {
         std::int64_t tir = 0, energy = 0, degenerate = 0, lost = 0, flipped = 0;
         double min_ratio = 1e300, max_view_angle = 0.0;
     };
-    auto make_triangle = [&](const glm::ivec2 (&c)[3], TriBeams& tb) {
-        const LightPath* p[3];
-        for (int k = 0; k < 3; ++k) p[k] = &paths[static_cast<std::size_t>(index.at(key(c[k].x, c[k].y)))];
-        int tir = 0, missed = 0;
-        for (const LightPath* q : p) {
-            tir += q->status == LightPath::TotalInternalReflection;
-            missed += q->status == LightPath::Missed;
-        }
-        if (missed == 3) return;
-        if (tir > 0) { ++tb.tir; return; }
-        if (missed > 0 || !same_structure(*p[0], *p[1]) || !same_structure(*p[0], *p[2])) { ++tb.lost; return; }
+    // The beams of three light rays through lattice points c (one beam per segment of their path).
+    auto emit = [&](const glm::dvec2 (&c)[3], const LightPath* const (&p)[3], TriBeams& tb) {
+        if (!same_structure(*p[0], *p[1]) || !same_structure(*p[0], *p[2])) { ++tb.lost; return; }
         if (p[0]->status == LightPath::Lost) ++tb.lost;
         const double flux = triangle_flux(c[0], c[1], c[2]);
         for (int k = 0; k < p[0]->segments; ++k) {
@@ -219,9 +211,11 @@ BeamSet LightGrid::generate() const {
             const double width = std::sqrt(2.0 * std::max(std::abs(b.area(y)), b.a_min));
             tb.max_view_angle = std::max(tb.max_view_angle, width / std::max(glm::length(x - camera), 1e-9));
             tb.beams.push_back(b);
-            std::uint8_t ends = kAllOnReceiver;
+            std::uint8_t ends = kAllOnReceiver | kReceiverOrNothing;
             for (const LightPath* q : p) {
-                if (q->end_object[static_cast<std::size_t>(k)] != scene.receiver.object_index) ends = 0;
+                const int e = q->end_object[static_cast<std::size_t>(k)];
+                if (e != scene.receiver.object_index) ends &= static_cast<std::uint8_t>(~kAllOnReceiver);
+                if (e != scene.receiver.object_index && e != -1) ends &= static_cast<std::uint8_t>(~kReceiverOrNothing);
             }
             for (const LightPath* q : p) {
                 const int e = q->end_object[static_cast<std::size_t>(k)];
@@ -229,6 +223,61 @@ BeamSet LightGrid::generate() const {
                 if (e >= 0 && e == scene.receiver.object_index) ends |= kEndsOnReceiver;
             }
             tb.ends.push_back(ends);
+        }
+    };
+    // Where a triangle's corners straddle a silhouette (some rays miss the specular object, Sec. 4.1:
+    // "invalid triangles crossing the silhouettes ... are omitted"), `clip` bisects its edges between
+    // the rays that hit and those that miss (10 steps: 1/1024 of the edge) and keeps the part that hits,
+    // so the light at the border of a surface is not lost with whole cells.
+    auto make_triangle = [&](const glm::ivec2 (&ci)[3], TriBeams& tb, bool clip) {
+        const LightPath* p[3];
+        glm::dvec2 c[3];
+        for (int k = 0; k < 3; ++k) {
+            p[k] = &paths[static_cast<std::size_t>(index.at(key(ci[k].x, ci[k].y)))];
+            c[k] = glm::dvec2(ci[k]);
+        }
+        int tir = 0, missed = 0;
+        for (const LightPath* q : p) {
+            tir += q->status == LightPath::TotalInternalReflection;
+            missed += q->status == LightPath::Missed;
+        }
+        if (missed == 3) return;
+        if (tir > 0) { ++tb.tir; return; }
+        if (missed == 0) {
+            emit(c, p, tb);
+            return;
+        }
+        int valid[2], nv = 0, gone[2], ng = 0;
+        for (int k = 0; k < 3; ++k) (p[k]->status == LightPath::Missed ? gone[ng++] : valid[nv++]) = k;
+        if (!clip || (nv == 2 && !same_structure(*p[valid[0]], *p[valid[1]]))) { ++tb.lost; return; }
+        const LightPath& ref = *p[valid[0]];
+        auto cut = [&](int a, int b, LightPath& out) {
+            glm::dvec2 lo = c[a], hi = c[b];
+            out = *p[a];
+            for (int it = 0; it < 10; ++it) {
+                const glm::dvec2 mid = 0.5 * (lo + hi);
+                LightPath m = trace(mid.x, mid.y);
+                if (m.status != LightPath::Missed && same_structure(m, ref)) lo = mid, out = m;
+                else hi = mid;
+            }
+            return lo;
+        };
+        if (nv == 1) {
+            const int a = valid[0];
+            LightPath pb, pc;
+            const glm::dvec2 qb = cut(a, gone[0], pb), qc = cut(a, gone[1], pc);
+            const glm::dvec2 t[3] = {c[a], qb, qc};
+            const LightPath* tp[3] = {p[a], &pb, &pc};
+            emit(t, tp, tb);
+        } else {
+            const int a = valid[0], b = valid[1], g = gone[0];
+            LightPath pa, pb;
+            const glm::dvec2 qa = cut(a, g, pa), qb = cut(b, g, pb);
+            const glm::dvec2 t0[3] = {c[a], c[b], qb}, t1[3] = {c[a], qb, qa};
+            const LightPath* p0[3] = {p[a], p[b], &pb};
+            const LightPath* p1[3] = {p[a], &pb, &pa};
+            emit(t0, p0, tb);
+            emit(t1, p1, tb);
         }
     };
 
@@ -311,8 +360,8 @@ BeamSet LightGrid::generate() const {
                     // wide as seen from the camera.
                     TriBeams tb;
                     const glm::ivec2 t0[3] = {q[0], q[1], q[2]}, t1[3] = {q[0], q[2], q[3]};
-                    make_triangle(t0, tb);
-                    make_triangle(t1, tb);
+                    make_triangle(t0, tb, false);
+                    make_triangle(t1, tb, false);
                     split = tb.min_ratio * s_.focus_ratio * std::ldexp(1.0, 2 * level) < 1.0 ||
                             tb.max_view_angle > s_.camera_angle;
                 }
@@ -360,14 +409,14 @@ BeamSet LightGrid::generate() const {
             }
             if (ring.size() == 4) {
                 const glm::ivec2 t0[3] = {q[0], q[1], q[2]}, t1[3] = {q[0], q[2], q[3]};
-                make_triangle(t0, per[n]);
-                make_triangle(t1, per[n]);
+                make_triangle(t0, per[n], true);
+                make_triangle(t1, per[n], true);
                 continue;
             }
             const glm::ivec2 centre{c.i + size / 2, c.j + size / 2};   // traced: the leaf could have split
             for (std::size_t k = 0; k < ring.size(); ++k) {
                 const glm::ivec2 t[3] = {centre, ring[k], ring[(k + 1) % ring.size()]};
-                make_triangle(t, per[n]);
+                make_triangle(t, per[n], true);
             }
         }
     });

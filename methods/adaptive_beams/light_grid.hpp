@@ -26,7 +26,7 @@
 namespace caustics::adaptive_beams {
 
 constexpr int kMaxSegments = 3;
-constexpr std::uint8_t kEndsOnDiffuse = 1, kEndsOnReceiver = 2, kAllOnReceiver = 4;
+constexpr std::uint8_t kEndsOnDiffuse = 1, kEndsOnReceiver = 2, kAllOnReceiver = 4, kReceiverOrNothing = 8;
 
 // One light ray followed through the specular objects (a vertex of the projected grid).
 struct LightPath {
@@ -62,7 +62,8 @@ struct GridStats {
 // The beams of one frame, ready to be accumulated.
 struct BeamSet {
     std::vector<Beam> beams;
-    std::vector<std::uint8_t> ends;   // per beam: kEndsOnDiffuse | kEndsOnReceiver where an edge ends there, kAllOnReceiver where all three do
+    std::vector<std::uint8_t> ends;   // per beam: kEndsOnDiffuse | kEndsOnReceiver where an edge ends there, kAllOnReceiver where all three do,
+                                      // kReceiverOrNothing where each ends there or at the extrusion limit
     GridStats stats;
 };
 
@@ -76,13 +77,13 @@ public:
     const LightProjection& projection() const { return proj_; }
     int resolution() const { return res_; }
 
-    // Follows the light ray through lattice point (i, j) of the finest grid (exposed for tests).
-    LightPath trace(int i, int j) const;
+    // Follows the light ray through point (i, j) of the finest grid's lattice (exposed for tests).
+    LightPath trace(double i, double j) const;
 
 private:
     struct Cell { int level, i, j; };
-    double triangle_flux(const glm::ivec2& a, const glm::ivec2& b, const glm::ivec2& c) const;
-    void ray_at(int i, int j, glm::dvec3& origin, glm::dvec3& dir) const;
+    double triangle_flux(const glm::dvec2& a, const glm::dvec2& b, const glm::dvec2& c) const;
+    void ray_at(double i, double j, glm::dvec3& origin, glm::dvec3& dir) const;
 
     const FrameGeometry& frame_;
     const RayTracer& tracer_;
