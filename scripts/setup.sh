@@ -8,6 +8,7 @@ PACKAGES=(
   libembree-dev libopenimageio-dev libopenexr-dev libtinygltf-dev libglm-dev libtbb-dev libfftw3-dev
   nlohmann-json3-dev libcli11-dev libgtest-dev libbenchmark-dev libglfw3-dev
   python3 python3-matplotlib python3-pandas python3-numpy python3-openimageio
+  slurm-wlm munge
 )
 
 missing=()

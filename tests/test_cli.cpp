@@ -205,20 +205,21 @@ TEST_F(CliTest, RenderWritesFilesAndKeys) {
                           "update_ms", "stages_ms", "threads", "error", "reference", "health", "status",
                           "build_type", "warmup", "repeats", "below_reference_noise", "message", "frame_ms",
                           "frame_time", "render_fps", "noisy_timing", "truth", "baseline", "no_better_than_flat",
-                          "claim"})
+                          "claim", "baseline_volume"})
         EXPECT_TRUE(m.contains(k)) << k;
-    EXPECT_EQ(m.size(), 28u) << m.dump(2);
+    EXPECT_EQ(m.size(), 29u) << m.dump(2);
     for (const char* k : {"inside", "error_vs_baseline", "reason", "met"}) EXPECT_TRUE(m["claim"].contains(k)) << k;
     for (const char* t : {"time_ms", "frame_ms"})
         for (const char* k : {"median", "min", "p90", "stdev", "iqr", "ci_rel"}) {
             ASSERT_TRUE(m[t].contains(k)) << t << "." << k;
             EXPECT_TRUE(m[t][k].is_number()) << t << "." << k;
         }
-    for (const char* view : {"receiver", "camera"})
+    for (const char* view : {"receiver", "camera", "camera_volume"})
         for (const char* k : {"nrmse", "relmse", "psnr", "ssim", "nrmse_fit", "fit_scale", "nrmse_net", "nrmse_net_lo",
                               "nrmse_net_hi", "relmse_net", "consistent_with_reference", "error_vs_baseline"})
             EXPECT_TRUE(m["error"][view].contains(k)) << view << "." << k;
     EXPECT_TRUE(m["error"]["receiver"]["nrmse"].is_number());
+    EXPECT_TRUE(m["error"]["camera_volume"]["nrmse"].is_null());   // no scattering medium: no volume view
     EXPECT_TRUE(m["error"]["receiver"]["nrmse_fit"].is_null());   // radiometric: never fitted
     for (const char* k : {"photons", "noise_nrmse", "cache_key"}) EXPECT_TRUE(m["reference"].contains(k)) << k;
     EXPECT_EQ(m["reference"]["photons"].get<long long>(), 50000);

@@ -257,6 +257,26 @@ TEST_F(MalformedScene, OutOfRangeValues) {
     j = base_;
     j["medium"] = {{"anisotropy", 1.0}};
     expect_rejected(write_json(j), "medium.anisotropy");
+    // The medium inside a dielectric (issue 15): every key validated, named with its path.
+    j = base_;
+    j["objects"][3]["material"]["medium"] = {{"scattering", -0.1}};
+    expect_rejected(write_json(j), "objects[3].material.medium.scattering", ">= 0");
+    j = base_;
+    j["objects"][3]["material"]["medium"] = {{"anisotropy", -1.0}};
+    expect_rejected(write_json(j), "objects[3].material.medium.anisotropy");
+    j = base_;
+    j["objects"][3]["material"]["medium"] = {{"absorption", 1e300}};
+    expect_rejected(write_json(j), "objects[3].material.medium.absorption", "valid:");
+    j = base_;
+    j["objects"][3]["material"]["medium"] = {{"density", 1.0}};
+    expect_rejected(write_json(j), "objects[3].material.medium.density");
+    j = base_;
+    j["objects"][3]["material"]["absorption"] = 0.5;
+    j["objects"][3]["material"]["medium"] = {{"absorption", 0.5}};
+    expect_rejected(write_json(j), "objects[3].material.medium.absorption", "one place");
+    j = base_;
+    j["objects"][1]["material"]["medium"] = {{"scattering", 0.5}};   // a diffuse floor has no inside
+    expect_rejected(write_json(j), "objects[1].material.medium");
     j = base_;
     j["objects"][0]["generator"]["wavelength"] = -0.25;
     expect_rejected(write_json(j), "objects[0].generator.wavelength", "> 0");

@@ -40,10 +40,11 @@ json metrics_skeleton(const SceneFrame& sf, const ResolvedMethod& m, const Rende
     j["update_ms"] = nullptr;
     j["stages_ms"] = json::object();
     j["threads"] = ThreadLimit::effective();
-    j["error"] = {{"receiver", null_view_errors()}, {"camera", null_view_errors()}};
+    j["error"] = {{"receiver", null_view_errors()}, {"camera", null_view_errors()}, {"camera_volume", null_view_errors()}};
     j["reference"] = {{"photons", nullptr}, {"noise_nrmse", nullptr}, {"cache_key", nullptr}};
     j["truth"] = {{"kind", nullptr}, {"noise_nrmse", nullptr}};
     j["baseline"] = {{"kind", nullptr}, {"error", nullptr}};
+    j["baseline_volume"] = {{"kind", nullptr}, {"error", nullptr}};
     j["health"] = json::object();
     j["status"] = nullptr;
     j["build_type"] = build_type();

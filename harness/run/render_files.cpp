@@ -25,6 +25,7 @@ void write_render_outputs(const std::string& dir, const SceneFrame& sf, const Re
                 if (!covered[p]) camera.pixels[p] = 0.0f;
             write_exr(camera, (d / "camera.exr").string());
         }
+        if (!out.camera_volume.empty()) write_exr(out.camera_volume, (d / "camera_volume.exr").string());
         for (const auto& [name, image] : out.debug)
             if (!image.empty() && (image.channels == 1 || image.channels == 3))
                 write_exr(image, (d / ("debug_" + name + ".exr")).string());

@@ -46,6 +46,19 @@ void check_size(const Image& image, int w, int h, const std::string& method, con
                                  std::to_string(h) + "x1");
 }
 
+// The volume view against the reference's, over every pixel, with the constant baseline (the mean
+// radiance over the pixels the reference lights: no caustic structure) as the bar to clear.
+void measure_volume_view(const Image& method, const ReferenceResult& reference, bool radiometric, nlohmann::json& j,
+                         std::vector<std::string>& messages) {
+    const TruthMaps truth{&reference.camera_volume, &reference.camera_volume_replicas, &reference.camera_volume_stderr};
+    const Baseline baseline = make_baseline(Image{}, reference.camera_volume);
+    const ViewErrors e = measure_view(method, truth, nullptr, radiometric, &baseline.map);
+    j["error"]["camera_volume"] = e.json;
+    j["baseline_volume"] = {{"kind", baseline.kind}, {"error", e.have_baseline ? json_number(e.baseline_error) : nlohmann::json(nullptr)}};
+    if (e.net.valid && e.have_baseline && e.no_better_than_flat)
+        messages.push_back("camera_volume: no better than the constant baseline");
+}
+
 std::string join_messages(const std::vector<std::string>& parts) {
     std::string s;
     for (const auto& p : parts) s += (s.empty() ? "" : "; ") + p;
@@ -62,7 +75,16 @@ RenderRun run_method(const SceneFrame& sf, const ResolvedMethod& m, const Render
     std::vector<std::string> messages;
 
     std::unique_ptr<Method> method = info.create(m.params);
-    const Capability cap = method->capabilities(sf.scene());
+    Capability cap = method->capabilities(sf.scene());
+    // A scene whose medium scatters has volume caustics, and extinction along every caustic path: only
+    // a method that renders the volume view (and so models the medium) is measured on it.
+    const bool volume = scene_scatters(sf.scene());
+    if (cap.supported && volume) {
+        const Capability v = method->volume_capability(sf.scene());
+        if (!v.supported)
+            cap = Capability::no("the scene's medium scatters (volume caustics, camera_volume, and extinction along "
+                                 "every path): " + v.reason);
+    }
     if (!cap.supported) {
         run.status = "skipped";
         run.message = cap.reason;
@@ -83,6 +105,7 @@ RenderRun run_method(const SceneFrame& sf, const ResolvedMethod& m, const Render
     RenderRequest request;
     request.receiver = &sf.chart();
     request.camera = &sf.gbuffer();
+    request.camera_volume = volume;
     // In an animated scene the geometry changes every frame, so a frame costs update + render; in a
     // static one update runs once and a frame is the render alone.
     const bool animated = sf.scene().animation.frames > 1;
@@ -141,7 +164,9 @@ RenderRun run_method(const SceneFrame& sf, const ResolvedMethod& m, const Render
     const CameraGBuffer& g = sf.gbuffer();
     check_size(out.receiver, sf.chart().width(), sf.chart().height(), info.name, "receiver");
     check_size(out.camera, g.width, g.height, info.name, "camera");
-    const std::int64_t nonfinite = count_nonfinite(out.receiver, nullptr) + count_nonfinite(out.camera, &g.covered);
+    check_size(out.camera_volume, g.width, g.height, info.name, "camera_volume");
+    const std::int64_t nonfinite = count_nonfinite(out.receiver, nullptr) + count_nonfinite(out.camera, &g.covered) +
+                                   count_nonfinite(out.camera_volume, nullptr);
     json health = json::object();
     for (const auto& [name, value] : out.health.counters) health[name] = value;
     health["nonfinite_pixels"] = nonfinite;
@@ -160,6 +185,7 @@ RenderRun run_method(const SceneFrame& sf, const ResolvedMethod& m, const Render
                            std::to_string(out.health.get("nonfinite")) + "): error not measured");
     if (out.receiver.empty()) messages.push_back("method produced no receiver map");
     if (out.camera.empty()) messages.push_back("method produced no camera view");
+    if (volume && out.camera_volume.empty()) messages.push_back("method produced no camera_volume view");
 
     // The truth and the reference are asked for only now, after the timed region and only for supported
     // runs. The receiver's truth is the analytic closed form where the scene has one (truth auto or
@@ -208,6 +234,8 @@ RenderRun run_method(const SceneFrame& sf, const ResolvedMethod& m, const Render
                 j["error"]["camera"] = e.json;
                 if (e.samples == 0) messages.push_back("camera view: no pixel's primary hit is a diffuse receiver");
             }
+            if (!out.camera_volume.empty() && !reference->camera_volume.empty())
+                measure_volume_view(out.camera_volume, *reference, info.radiometric_at(m.params), j, messages);
             if (!info.radiometric_at(m.params))
                 messages.push_back("not radiometric: nrmse_fit/fit_scale are after a least-squares scale fit");
         }

@@ -39,6 +39,7 @@ nlohmann::json reference_summary_json(const ReferenceResult& ref) {
     return {{"photons", ref.photons},
             {"noise_nrmse", json_number(ref.noise_nrmse)},
             {"noise_nrmse_camera", json_number(ref.noise_nrmse_camera)},
+            {"noise_nrmse_volume", ref.camera_volume.empty() ? json(nullptr) : json_number(ref.noise_nrmse_volume)},
             {"cache_key", ref.cache_key},
             {"sampler", sampler_name(ref.sampler)},
             {"replicas", ref.replicas},
@@ -65,12 +66,14 @@ nlohmann::json reference_json(const Scene& scene, int frame, const ReferenceResu
                                                 : json(nullptr);
     j["receiver"] = {{"object", scene.receiver.object}, {"width", ref.receiver.width}, {"height", ref.receiver.height}};
     j["camera"] = {{"width", ref.camera.width}, {"height", ref.camera.height}};
+    j["camera_volume"] = {{"measured", !ref.camera_volume.empty()}};
     j["ledger"] = {{"emitted", l.emitted},
                    {"deposited_receiver", l.deposited_receiver},
                    {"deposited_other", l.deposited_other},
                    {"direct", l.direct},
                    {"escaped", l.escaped},
                    {"absorbed", l.absorbed},
+                   {"scattered", l.scattered},
                    {"truncated", l.truncated},
                    {"accounted", l.accounted()},
                    {"relative_imbalance",
@@ -87,6 +90,10 @@ void write_reference_outputs(const std::string& dir, const Scene& scene, int fra
     if (!ref.camera.empty()) write_exr(ref.camera, (d / "reference_camera.exr").string());
     if (!ref.receiver_stderr.empty()) write_exr(ref.receiver_stderr, (d / "reference_stderr.exr").string());
     if (!ref.camera_stderr.empty()) write_exr(ref.camera_stderr, (d / "reference_camera_stderr.exr").string());
+    if (!ref.camera_volume.empty()) {
+        write_exr(ref.camera_volume, (d / "reference_camera_volume.exr").string());
+        write_exr(ref.camera_volume_stderr, (d / "reference_camera_volume_stderr.exr").string());
+    }
     write_text_atomic((d / "reference.json").string(), reference_json(scene, frame, ref).dump(2) + "\n");
 }
 

@@ -24,9 +24,15 @@
 #include <caustics/run/render_run.hpp>
 #include <caustics/run/run_context.hpp>
 
+#include "detail/sweep_files.hpp"
+
 namespace caustics {
 namespace fs = std::filesystem;
 using nlohmann::json;
+using sweep_files::differences;
+using sweep_files::joined;
+using sweep_files::listed;
+using sweep_files::read_result_lines;
 
 namespace {
 
@@ -92,33 +98,6 @@ std::string last_line_of(const std::string& path) {
     const std::string prefix = "caustics: error: ";
     if (last.rfind(prefix, 0) == 0) last = last.substr(prefix.size());
     return last;
-}
-
-// The complete lines of results.jsonl. A line cut off by a kill (no newline, or not JSON) is dropped:
-// its run is redone.
-std::vector<std::string> read_result_lines(const fs::path& path) {
-    std::vector<std::string> lines;
-    std::ifstream in(path, std::ios::binary);
-    if (!in) return lines;
-    std::stringstream buffer;
-    buffer << in.rdbuf();
-    const std::string text = buffer.str();
-    std::size_t begin = 0;
-    while (true) {
-        const std::size_t end = text.find('\n', begin);
-        if (end == std::string::npos) break;
-        std::string line = text.substr(begin, end - begin);
-        begin = end + 1;
-        const json row = json::parse(line, nullptr, false);
-        if (!row.is_discarded() && row.is_object() && row.contains("run_id")) lines.push_back(std::move(line));
-    }
-    return lines;
-}
-
-std::string joined(const std::vector<std::string>& lines) {
-    std::string text;
-    for (const auto& l : lines) text += l + "\n";
-    return text;
 }
 
 std::string csv_field(const json& v) {
@@ -235,35 +214,6 @@ std::string plan_hash(const json& plan) {
     return h.hex();
 }
 
-std::string brief(const json& v) {
-    std::string s = v.dump();
-    return s.size() > 80 ? s.substr(0, 77) + "..." : s;
-}
-
-// "key.path: <in the folder> in the folder, <now> now" for every leaf that differs.
-void differences(const json& was, const json& now, const std::string& path, std::vector<std::string>& out) {
-    if (was.is_object() && now.is_object()) {
-        std::set<std::string> keys;
-        for (const auto& [k, v] : was.items()) keys.insert(k);
-        for (const auto& [k, v] : now.items()) keys.insert(k);
-        for (const auto& k : keys) {
-            const std::string sub = path.empty() ? k : path + "." + k;
-            if (!was.contains(k)) out.push_back(sub + ": absent in the folder, " + brief(now[k]) + " now");
-            else if (!now.contains(k)) out.push_back(sub + ": " + brief(was[k]) + " in the folder, absent now");
-            else differences(was[k], now[k], sub, out);
-        }
-    } else if (was != now) {
-        out.push_back((path.empty() ? std::string("plan") : path) + ": " + brief(was) + " in the folder, " + brief(now) + " now");
-    }
-}
-
-std::string listed(const std::vector<std::string>& items) {
-    std::string text;
-    for (std::size_t i = 0; i < items.size() && i < 3; ++i) text += (i ? "; " : "") + items[i];
-    if (items.size() > 3) text += "; and " + std::to_string(items.size() - 3) + " more";
-    return text;
-}
-
 // For --resume: the folder's manifest when the sweep in it was started with this plan (an empty object
 // when the folder holds no sweep yet); throws InputError naming what differs otherwise, or when the folder
 // holds results whose plan cannot be told. Reads only.
@@ -313,13 +263,80 @@ void apply_reference_options(const SweepSpec& spec, const PlannedRun& run, Rende
     ro.reference.noise_target = run.noise_target;
 }
 
+// What a shard's manifest records of it: which of the plan's runs it holds (positions and ids).
+json shard_record(const ShardId& shard, const std::vector<PlannedRun>& runs, const std::vector<std::size_t>& positions) {
+    json ids = json::array();
+    for (const std::size_t p : positions) ids.push_back(runs[p].id);
+    return {{"index", shard.index}, {"count", shard.count}, {"positions", positions}, {"run_ids", ids}};
+}
+
+std::string shard_text(const json& shard) {
+    if (!shard.is_object()) return "a whole sweep";
+    return "shard " + shard.value("index", json()).dump() + "/" + shard.value("count", json()).dump();
+}
+
+std::string reference_key(const PlannedRun& run) { return run.scene_name + "-f" + std::to_string(run.frame); }
+
+// The reference of the run's scene and frame, through the cache, and its files in `ref_dir`. False when
+// the scene frame has no reference (bad input of that scene frame: the runs record the message).
+bool prepare_reference(const SweepSpec& spec, const PlannedRun& run, const SweepOptions& options,
+                       const std::string& cache, const fs::path& ref_dir) {
+    try {
+        RenderOptions ro;
+        apply_reference_options(spec, run, ro);
+        ro.threads = options.threads;
+        ro.cache_dir = cache;
+        ro.progress = options.progress;
+        SceneFrame sf(load_scene(run.scene_path), run.frame);
+        const ReferenceResult ref = reference_for(sf, ro);
+        write_reference_outputs(ref_dir.string(), sf.scene(), run.frame, ref);
+        // The closed form the runs' receiver errors are measured against, for the report's images.
+        if (run.truth != "reference") {
+            const AnalyticTruth truth = analytic_truth(sf.geometry(), sf.chart());
+            if (truth.available) write_exr(truth.receiver, (ref_dir / "truth_receiver.exr").string());
+        }
+        return true;
+    } catch (const InputError&) {
+        return false;
+    }
+}
+
+// --references-only: every (scene, frame) reference of the sweep, or shard I of N of them (the pairs in
+// order of first use, pair k in shard k mod N), into the cache and DIR/references/. Runs nothing.
+SweepSummary compute_references(const SweepSpec& spec, const std::vector<PlannedRun>& runs, const SweepOptions& options) {
+    const std::string cache = options.cache_dir.empty() ? default_cache_dir() : options.cache_dir;
+    SweepSummary summary;
+    std::set<std::string> seen;
+    std::size_t k = 0;
+    for (const PlannedRun& run : runs) {
+        const std::string key = reference_key(run);
+        if (!seen.insert(key).second) continue;
+        const bool mine = !options.shard.active() || static_cast<int>(k % options.shard.count) == options.shard.index;
+        ++k;
+        if (!mine) continue;
+        ++summary.total;
+        if (options.progress) std::fprintf(stderr, "sweep: reference %s\n", key.c_str());
+        if (prepare_reference(spec, run, options, cache, fs::path(options.out_dir) / "references" / key)) ++summary.references;
+        else ++summary.skipped;
+    }
+    return summary;
+}
+
 }  // namespace
 
-std::string results_csv(const SweepSpec& spec, const std::vector<json>& rows) {
+std::set<std::string> csv_param_names(const SweepSpec& spec) {
     std::set<std::string> param_names;
     for (const auto& m : spec.methods)
         if (const MethodInfo* info = find_method(m.method))
             for (const auto& p : info->params) param_names.insert(p.name);
+    return param_names;
+}
+
+std::string results_csv(const SweepSpec& spec, const std::vector<json>& rows) {
+    return results_csv(csv_param_names(spec), rows);
+}
+
+std::string results_csv(const std::set<std::string>& param_names, const std::vector<json>& rows) {
     struct Column {
         std::string name;
         std::function<json(const json&)> get;
@@ -363,6 +380,7 @@ std::string results_csv(const SweepSpec& spec, const std::vector<json>& rows) {
                                "consistent_with_reference"}) {
         add(metric, {"error", "receiver", metric});
         add(std::string("camera_") + metric, {"error", "camera", metric});
+        add(std::string("volume_") + metric, {"error", "camera_volume", metric});
     }
     // The error the report ranks, of the kind the method is judged by (fitted when not radiometric).
     columns.push_back({"error_kind", [](const json& r) {
@@ -393,6 +411,9 @@ std::string results_csv(const SweepSpec& spec, const std::vector<json>& rows) {
                            return t.is_null() ? at_path(r, {"reference", "noise_nrmse"}) : t;
                        }});
     add("reference_noise_nrmse", {"reference", "noise_nrmse"});
+    add("reference_noise_nrmse_volume", {"reference", "noise_nrmse_volume"});
+    add("volume_baseline_error", {"baseline_volume", "error"});
+    add("volume_error_vs_baseline", {"error", "camera_volume", "error_vs_baseline"});
     add("noise_target", {"reference", "noise_target"});
     add("noise_target_met", {"reference", "noise_target_met"});
     add("below_reference_noise", {"below_reference_noise"});
@@ -432,10 +453,18 @@ SweepSummary run_sweep(const SweepOptions& options) {
                              std::to_string(kMaxRunsWithoutConfirmation) + "); pass --yes to run it anyway");
     const std::vector<PlannedRun> runs = plan_runs(spec);
     if (options.out_dir.empty()) throw InputError("--out", "", "a sweep needs an output folder");
-    const fs::path dir(options.out_dir);
+    // A shard is a sweep folder of its own under DIR/shards/I, holding the runs assigned to it.
+    const fs::path dir = options.shard.active() ? fs::path(options.out_dir) / "shards" / std::to_string(options.shard.index)
+                                                : fs::path(options.out_dir);
+    std::vector<std::size_t> positions;
+    if (options.shard.active()) {
+        positions = assign_shards(runs, options.shard.count)[static_cast<std::size_t>(options.shard.index)];
+    } else {
+        for (std::size_t i = 0; i < runs.size(); ++i) positions.push_back(i);
+    }
     const fs::path jsonl = dir / "results.jsonl";
     std::error_code ec;
-    if (!options.resume && fs::exists(jsonl, ec))
+    if (!options.resume && !options.references_only && fs::exists(jsonl, ec))
         throw InputError("--out", options.out_dir, "already holds a sweep; pass --resume to continue it or choose another folder");
     // Every scene must load before anything runs: a malformed scene is bad input of the whole sweep.
     std::vector<std::string> scene_hashes;
@@ -444,19 +473,31 @@ SweepSummary run_sweep(const SweepOptions& options) {
     const json plan = sweep_plan(spec, runs, scene_hashes, options.threads, timeout);
 
     // A resumed sweep must continue the plan it was started with: checked before any file is written.
+    if (options.references_only) return compute_references(spec, runs, options);
     json manifest = options.resume ? check_resume(dir, plan, spec) : json::object();
+    const json shard = options.shard.active() ? shard_record(options.shard, runs, positions) : json();
+    if (!manifest.empty() && manifest.value("shard", json()) != shard)
+        throw InputError("--resume", dir.string(),
+                         "the sweep in this folder was started as " + shard_text(manifest.value("shard", json())) +
+                             ", not as " + shard_text(shard) + "; resume it with the same --shard");
     if (manifest.empty()) {
         manifest = run_context();
         manifest["spec_path"] = options.spec_path;
         manifest["spec"] = spec.as_run;
         manifest["runs_planned"] = runs.size();
+        if (const json slurm = slurm_environment(); !slurm.is_null()) manifest["slurm"] = slurm;
     } else {
         json resumed = run_context();
         resumed["spec_path"] = options.spec_path;
+        if (const json slurm = slurm_environment(); !slurm.is_null()) resumed["slurm"] = slurm;
         manifest["resumed"].push_back(resumed);
     }
     manifest["plan"] = plan;
     manifest["plan_hash"] = plan_hash(plan);
+    if (options.shard.active()) {
+        manifest["shard"] = shard;
+        manifest["csv_params"] = csv_param_names(spec);
+    }
     fs::create_directories(dir / "runs");
     write_text_atomic((dir / "manifest.json").string(), manifest.dump(2) + "\n");
 
@@ -472,14 +513,15 @@ SweepSummary run_sweep(const SweepOptions& options) {
     write_text_atomic((dir / "results.csv").string(), results_csv(spec, rows));
 
     SweepSummary summary;
-    summary.total = runs.size();
+    summary.total = positions.size();
     summary.done_before = finished.size();
     const std::string program = options.render_program.empty() ? self_executable() : options.render_program;
     const std::string cache = options.cache_dir.empty() ? default_cache_dir() : options.cache_dir;
     const auto start = std::chrono::steady_clock::now();
     std::set<std::string> references_done;
 
-    for (const PlannedRun& run : runs) {
+    for (const std::size_t position : positions) {
+        const PlannedRun& run = runs[position];
         if (finished.count(run.id)) continue;
         const fs::path run_dir = dir / "runs" / run.id;
         fs::remove_all(run_dir, ec);   // a run cut off earlier is redone from scratch
@@ -487,27 +529,10 @@ SweepSummary run_sweep(const SweepOptions& options) {
 
         // The shared reference of this scene and frame, computed here once, read by the children from
         // the cache. A frame outside the scene's animation is the run's problem (skipped), not the sweep's.
-        const std::string ref_key = run.scene_name + "-f" + std::to_string(run.frame);
+        const std::string ref_key = reference_key(run);
         if (!references_done.count(ref_key)) {
             references_done.insert(ref_key);
-            try {
-                RenderOptions ro;
-                apply_reference_options(spec, run, ro);
-                ro.threads = options.threads;
-                ro.cache_dir = cache;
-                ro.progress = options.progress;
-                SceneFrame sf(load_scene(run.scene_path), run.frame);
-                const ReferenceResult ref = reference_for(sf, ro);
-                const fs::path ref_dir = dir / "references" / ref_key;
-                write_reference_outputs(ref_dir.string(), sf.scene(), run.frame, ref);
-                // The closed form the runs' receiver errors are measured against, for the report's images.
-                if (run.truth != "reference") {
-                    const AnalyticTruth truth = analytic_truth(sf.geometry(), sf.chart());
-                    if (truth.available) write_exr(truth.receiver, (ref_dir / "truth_receiver.exr").string());
-                }
-            } catch (const InputError&) {
-                // Recorded per run below, from the child's message.
-            }
+            prepare_reference(spec, run, options, cache, dir / "references" / ref_key);
         }
 
         std::vector<std::string> argv = {program, "render", run.scene_path, "--method", run.method,
@@ -526,10 +551,10 @@ SweepSummary run_sweep(const SweepOptions& options) {
         const std::string log = (run_dir / "log.txt").string();
         if (options.progress) {
             const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-            const std::size_t done = summary.ran, left = runs.size() - finished.size() - summary.ran;
+            const std::size_t done = summary.ran, left = positions.size() - finished.size() - summary.ran;
             std::string eta = done ? std::to_string(static_cast<long>(elapsed / done * left)) + " s" : "?";
             std::fprintf(stderr, "sweep [%zu/%zu] %s  (%.2f runs/s, ETA %s)\n", finished.size() + summary.ran + 1,
-                         runs.size(), run.id.c_str(), done ? done / elapsed : 0.0, eta.c_str());
+                         positions.size(), run.id.c_str(), done ? done / elapsed : 0.0, eta.c_str());
         }
         const ChildResult child = run_child(argv, log, timeout);
 

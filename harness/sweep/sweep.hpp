@@ -21,11 +21,13 @@
 // is written; so is --resume of a folder with results but no readable manifest. A folder from before
 // plans were recorded is compared by its spec (description and report settings aside). A resume with the
 // same plan keeps the manifest and appends its own context to "resumed".
+#include <set>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include <caustics/sweep/shard.hpp>
 #include <caustics/sweep/sweep_spec.hpp>
 
 namespace caustics {
@@ -41,12 +43,16 @@ struct SweepOptions {
     std::string render_program;                // the `caustics` executable; empty: this process's
     double timeout_s = 0.0;                    // per-run limit; 0: the spec's timing.timeout_s or none
     bool progress = true;
+    ShardId shard;                             // --shard I/N: shard I of N into out_dir/shards/I (shard.hpp)
+    bool references_only = false;              // compute the references (of the shard's (scene, frame)
+                                               // pairs when sharded) into the cache and out_dir/references
 };
 
 constexpr std::size_t kMaxRunsWithoutConfirmation = 500;
 
 struct SweepSummary {
     std::size_t total = 0, done_before = 0, ran = 0, ok = 0, skipped = 0, failed = 0, unstable = 0;
+    std::size_t references = 0;   // references computed or found (--references-only)
 };
 
 // Throws InputError for a bad spec, a sweep of more than kMaxRunsWithoutConfirmation runs without --yes
@@ -57,5 +63,9 @@ SweepSummary run_sweep(const SweepOptions& options);
 // results.csv from the JSON lines (the columns depend only on the spec's methods, so a resumed sweep
 // writes the same header).
 std::string results_csv(const SweepSpec& spec, const std::vector<nlohmann::json>& rows);
+// The same from the parameter columns (every parameter of the spec's methods' tables), which a shard's
+// manifest records so that a merge writes the header the whole sweep would.
+std::string results_csv(const std::set<std::string>& param_names, const std::vector<nlohmann::json>& rows);
+std::set<std::string> csv_param_names(const SweepSpec& spec);
 
 }  // namespace caustics

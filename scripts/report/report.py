@@ -20,6 +20,7 @@ except ImportError as error:  # say which module is missing and where it comes f
 import figures  # noqa: E402
 import quality  # noqa: E402
 import tables  # noqa: E402
+import volume  # noqa: E402
 from load import read_manifest, read_results  # noqa: E402
 
 
@@ -85,6 +86,7 @@ def main(argv):
         table = tables.write_tables(frame, scene, tab_dir, budget, target, paper, context)
         if table:
             out += [table, ""]
+        out += volume.volume_section(frame, scene, fig_dir, tab_dir, sweep_dir)
     not_ok = frame[frame["status"] != "ok"]
     if not not_ok.empty:
         out += ["## Runs that did not complete", "", "| run | status | message |", "|---|---|---|"]
