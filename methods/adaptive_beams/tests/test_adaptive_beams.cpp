@@ -274,3 +274,32 @@ TEST(AdaptiveBeams, RefusesWhatItCannotDraw) {
     }
 }
 
+
+// The two volume-caustic scenes at a small camera: every view finite and lit, the volume caustic in the
+// camera's medium (the fog; the murky water the camera is in), the health counters filled.
+TEST(AdaptiveBeams, RendersSphereFogAndPoolMurky) {
+    for (const char* name : {"sphere_fog", "pool_murky"}) {
+        SCOPED_TRACE(name);
+        Scene scene = test_support::shipped_scene(name);
+        scene.camera.width = 64;
+        scene.camera.height = 48;
+        const Rendered r = render(scene, {}, 64);
+        EXPECT_EQ(r.gbuffer.medium_object, std::string(name) == "pool_murky" ? 0 : -1);
+        for (const Image* img : {&r.out.receiver, &r.out.camera, &r.out.camera_volume}) {
+            EXPECT_TRUE(all_finite(*img));
+            double sum = 0.0;
+            for (float v : img->pixels) sum += v;
+            EXPECT_GT(sum, 0.0);
+        }
+        EXPECT_GT(r.out.health.get("beams_generated"), 0);
+        EXPECT_GT(r.out.health.get("fill"), 0);
+        EXPECT_EQ(r.out.health.get("nonfinite"), 0);
+        std::printf("%s: beams %lld split %lld flipped %lld fill %lld clamped %lld near_clipped %lld\n", name,
+                    static_cast<long long>(r.out.health.get("beams_generated")),
+                    static_cast<long long>(r.out.health.get("beams_split")),
+                    static_cast<long long>(r.out.health.get("flipped")),
+                    static_cast<long long>(r.out.health.get("fill")),
+                    static_cast<long long>(r.out.health.get("clamped")),
+                    static_cast<long long>(r.out.health.get("near_clipped")));
+    }
+}
