@@ -91,8 +91,9 @@ struct CausticOutput {
     Image texture;        // TextureRequest width x height, 1 channel, E_c [W/m^2] (see TextureRequest)
     Image texture_rgb;    // optional colour version of the texture (dispersion), 3 channels
     // Volume caustic radiance L_v [W/(m^2 sr)] (DESIGN.md section 3), camera G-buffer width x height, 1
-    // channel: per pixel, the radiance scattered once towards the camera, along the primary ray from the
-    // pinhole to its first hit (to infinity on a miss) and inside the camera's own medium
+    // channel: per pixel, the radiance scattered once towards the camera, along the primary ray from
+    // kVolumeNearDistance (frame/camera.hpp, 5 cm) off the pinhole to its first hit (to infinity on a
+    // miss) and inside the camera's own medium
     // (medium_at(scene, gbuffer.medium_object)), by light that had at least one specular event,
     // attenuated by extinction along the whole path. Scattering seen through a refracting surface is not
     // part of it. Every pixel is read.

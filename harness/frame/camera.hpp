@@ -25,6 +25,13 @@ struct CameraModel {
     double pixel_solid_angle(int ix, int iy) const;
 };
 
+// The volume view (camera_volume, api/method.hpp) starts this far from the pinhole [m], like a camera's
+// near plane: scattering closer than that is not part of it. Light traced towards a pinhole that sits
+// inside a lit medium (the camera under the water of pool_murky) contributes 1/r^2 per point, whose
+// variance grows as 1/r_near; a near distance of a few centimetres keeps the reference's per-pixel
+// noise within reach of a few million photons and changes a ray's integral by about r_near over its length.
+inline constexpr double kVolumeNearDistance = 0.05;
+
 struct CameraGBuffer {
     int width = 0, height = 0;
     std::vector<std::uint8_t> covered;     // 1 where the primary hit is a diffuse object

@@ -19,7 +19,9 @@
 // exists, so nothing is cached or written. A reference that traced no photon at all is an internal
 // failure (exit 1). reference_cache.cpp never stores or serves an empty entry either.
 //
-// Bump kReferenceVersion (reference_cache.cpp) whenever the transport or the estimators change.
+// The photon's path is in reference_transport.cpp, media and the camera_volume view in
+// reference_volume.cpp. Bump kReferenceVersion (reference_cache.cpp) whenever the transport or the
+// estimators change.
 #include <caustics/reference/reference.hpp>
 
 #include <algorithm>
@@ -47,97 +49,21 @@
 #include <caustics/frame/ray_tracer.hpp>
 #include <caustics/reference/reference_rays.hpp>
 
+#include "detail/transport.hpp"
+
 namespace caustics {
 namespace {
 
 constexpr std::uint64_t kBatchSize = 65536;
 // Photons of one batch traced as one task (and summed into one partial ledger), in the batch's order.
 constexpr std::size_t kChunkSize = 2048;
-// One photon's normalised weight q (<= 1) becomes an integer of at most 2^30: 1e9 photons in one bin of
-// one replica stay below 2^60, and each contribution keeps ~2^-30 relative precision.
-constexpr double kFixedScale = 1073741824.0;  // 2^30
 
-// Unpolarised Fresnel reflectance of a dielectric interface.
-double fresnel_reflectance(double cos_i, double cos_t, double n_i, double n_t) {
-    const double rs = (n_i * cos_i - n_t * cos_t) / (n_i * cos_i + n_t * cos_t);
-    const double rp = (n_t * cos_i - n_i * cos_t) / (n_t * cos_i + n_i * cos_t);
-    return 0.5 * (rs * rs + rp * rp);
-}
-
-// Ray logs: NoRayLog compiles away; RayRecorder keeps every query for bench/ replays.
-struct NoRayLog {
-    void ray(const glm::dvec3&, const glm::dvec3&, double, double, bool) {}
-};
-
-struct RayRecorder {
-    double offset = 0.0;   // the tracer's own minimum tnear
-    std::vector<RecordedRay> rays;
-    void ray(const glm::dvec3& o, const glm::dvec3& d, double tmin, double tmax, bool shadow) {
-        RecordedRay r;
-        for (int i = 0; i < 3; ++i) r.origin[i] = static_cast<float>(o[i]), r.dir[i] = static_cast<float>(d[i]);
-        r.tnear = static_cast<float>(std::max(tmin, offset));
-        r.tfar = tmax >= 3e38 ? std::numeric_limits<float>::infinity() : static_cast<float>(tmax);
-        r.shadow = shadow;
-        rays.push_back(r);
-    }
-};
-
-// Per replica, bin / pixel: the sum of round(2^30 q). A batch belongs to one replica, so a thread adds
-// into the slice of the replica it is tracing (`replica` offsets).
-struct Accumulators {
-    std::vector<std::int64_t> bins;     // receiver, replica-major
-    std::vector<std::int64_t> pixels;   // camera, replica-major
-    std::size_t bin_offset = 0, pixel_offset = 0;
-};
-
-// What a camera deposit needs of one pixel, packed so that it costs one cache miss: the pixel's
-// G-buffer footprint factor (d_c^2 / cos_c) and the primary-hit object (-1 where not covered).
-struct PixelInfo {
-    double scale = 0.0;
-    int object = -1;
-};
-
-// Everything one photon needs, shared read-only by all threads.
-struct Transport {
-    const RayTracer* tracer = nullptr;
-    const FrameGeometry* frame = nullptr;
-    const ReceiverChart* chart = nullptr;
-    const CameraGBuffer* gbuffer = nullptr;
-    const CameraModel* camera = nullptr;
-    std::vector<double> pixel_scale;   // camera: d_c^2 / cos_c of each pixel's G-buffer point
-    std::vector<PixelInfo> pixel_info; // camera: pixel_scale and G-buffer object, packed
-    std::vector<Emitter> emitters;
-    std::vector<double> start_weight;  // q of a photon of each light as it leaves (power / largest power)
-    double scale = 1.0;                // the largest light's power [W]: converts q sums to flux
-    double outside_ior = 1.0;
-    int receiver_object = -1;
-    int max_depth = 8;
-    bool fresnel = false;
-    std::uint64_t seed = 1;
-    SamplerKind sampler = SamplerKind::Sobol;
-
-    // Photon i of a replica belongs to light i mod L and is that light's sample i / L.
-    PhotonSampler sampler_of(std::uint32_t replica, std::uint64_t i) const {
-        return PhotonSampler(sampler, seed + 0x51ED270B27D5A3C1ull * (i % emitters.size()), replica, i / emitters.size());
-    }
-    void batch_order(std::uint32_t replica, std::uint64_t first, std::uint64_t last, std::vector<std::uint32_t>& order,
-                     std::vector<std::uint32_t>& scratch) const {
-        photon_batch_order(
-            emitters.size(), first, last,
-            [&](std::uint64_t i, double& u1, double& u2) {
-                const PhotonSampler s = sampler_of(replica, i);
-                u1 = s.get(0), u2 = s.get(1);
-            },
-            order, scratch);
-    }
-    template <class Log>
-    void trace(std::uint32_t replica, std::uint64_t i, FluxLedger& ledger, Accumulators& acc, Log& log) const;
-    // The pixel a deposit at p would land in, or -1 (outside the image or behind the camera).
-    std::ptrdiff_t camera_pixel(const glm::dvec3& p) const;
-    template <class Log>
-    void deposit_camera(const Hit& hit, std::size_t index, const glm::dvec3& dir_in, double w, Accumulators& acc,
-                        Log& log) const;
-};
+using detail::Accumulators;
+using detail::kFixedScale;
+using detail::NoRayLog;
+using detail::PixelInfo;
+using detail::RayRecorder;
+using detail::Transport;
 
 void add_ledger(FluxLedger& sum, const FluxLedger& l) {
     sum.emitted += l.emitted;
@@ -148,138 +74,6 @@ void add_ledger(FluxLedger& sum, const FluxLedger& l) {
     sum.absorbed += l.absorbed;
     sum.scattered += l.scattered;
     sum.truncated += l.truncated;
-}
-
-void add_fixed(std::int64_t& acc, double x) {
-    // x >= 0: adding 1/2 and truncating rounds to nearest, without a libm call.
-    acc += static_cast<std::int64_t>(x * kFixedScale + 0.5);
-}
-
-template <class Log>
-void Transport::trace(std::uint32_t replica, std::uint64_t i, FluxLedger& ledger, Accumulators& acc, Log& log) const {
-    const PhotonSampler rng = sampler_of(replica, i);
-    const std::size_t light = emitters.size() == 1 ? 0 : static_cast<std::size_t>(i % emitters.size());
-    const Emitter& emitter = emitters[light];
-    glm::dvec3 origin, dir;
-    emitter.sample(rng.get(0), rng.get(1), origin, dir);
-    const double u_dispersion = rng.get(2);
-    int next_dim = 3;   // Fresnel choices take dimensions 3, 4, ... in order of the events
-    double w = start_weight[light];
-    ledger.emitted += w;
-
-    const auto& objects = frame->scene->objects;
-    int depth = 0;       // specular events so far
-    int inside = -1;     // dielectric object the photon travels in (-1: outside medium)
-    for (;;) {
-        log.ray(origin, dir, 1e-6, 1e30, false);
-        const Hit hit = tracer->intersect(origin, dir);
-        if (!hit.valid) {
-            ledger.escaped += w;
-            return;
-        }
-        if (inside >= 0) {   // Beer-Lambert over the segment just travelled inside a dielectric
-            const double ka = objects[static_cast<std::size_t>(inside)].material.absorption;
-            if (ka > 0.0) {
-                const double kept = w * std::exp(-ka * hit.t);
-                ledger.absorbed += w - kept;
-                w = kept;
-            }
-        }
-        const Material& material = objects[static_cast<std::size_t>(hit.object)].material;
-        if (material.type == MaterialType::Diffuse) {
-            if (depth == 0) {
-                ledger.direct += w;
-                return;
-            }
-            // The camera pixel's data is fetched first (prefetch) so that its cache misses overlap the
-            // receiver deposit's.
-            std::ptrdiff_t pixel = -1;
-            if (camera) {
-                pixel = camera_pixel(hit.position);
-                if (pixel >= 0) {
-                    __builtin_prefetch(&pixel_info[static_cast<std::size_t>(pixel)]);
-                    __builtin_prefetch(&acc.pixels[acc.pixel_offset + static_cast<std::size_t>(pixel)], 1);
-                }
-            }
-            if (hit.object == receiver_object) {
-                ledger.deposited_receiver += w;
-                const int bin = chart->bin_of(hit.position);
-                if (bin >= 0) add_fixed(acc.bins[acc.bin_offset + static_cast<std::size_t>(bin)], w);
-            } else {
-                ledger.deposited_other += w;
-            }
-            if (pixel >= 0) deposit_camera(hit, static_cast<std::size_t>(pixel), dir, w, acc, log);
-            return;
-        }
-        if (depth >= max_depth) {
-            ledger.truncated += w;
-            return;
-        }
-        ++depth;
-
-        const bool from_outside = glm::dot(dir, hit.geometric_normal) < 0.0;
-        // Normal on the side the photon arrives from; fall back to the geometric one where the
-        // interpolated normal disagrees with the side (grazing hits on coarse meshes).
-        glm::dvec3 n = from_outside ? hit.shading_normal : -hit.shading_normal;
-        double cos_i = -glm::dot(dir, n);
-        if (cos_i <= 0.0) {
-            n = from_outside ? hit.geometric_normal : -hit.geometric_normal;
-            cos_i = -glm::dot(dir, n);
-        }
-        const glm::dvec3 reflected = dir + 2.0 * cos_i * n;
-        if (material.type == MaterialType::Mirror) {
-            dir = glm::normalize(reflected);
-            origin = hit.position;
-            continue;   // the medium does not change at a mirror
-        }
-        const double ior = material.ior + material.dispersion * u_dispersion;
-        const double n_i = from_outside ? outside_ior : ior;
-        const double n_t = from_outside ? ior : outside_ior;
-        const double eta = n_i / n_t;
-        const double sin2_t = eta * eta * (1.0 - cos_i * cos_i);
-        bool reflect = sin2_t >= 1.0;   // total internal reflection
-        double cos_t = 0.0;
-        if (!reflect) {
-            cos_t = std::sqrt(1.0 - sin2_t);
-            // Fresnel by Russian roulette: unbiased and flux conserving, one path per photon.
-            if (fresnel) reflect = rng.get(next_dim++) < fresnel_reflectance(cos_i, cos_t, n_i, n_t);
-        }
-        dir = reflect ? reflected : eta * dir + (eta * cos_i - cos_t) * n;
-        dir = glm::normalize(dir);
-        origin = hit.position;
-        // Inside or outside is decided by where the new direction actually points.
-        inside = glm::dot(dir, hit.geometric_normal) < 0.0 ? hit.object : -1;
-    }
-}
-
-std::ptrdiff_t Transport::camera_pixel(const glm::dvec3& p) const {
-    double px, py;
-    if (!camera->project(p, px, py)) return -1;
-    if (!(px >= 0.0 && py >= 0.0 && px < gbuffer->width && py < gbuffer->height)) return -1;
-    const int ix = static_cast<int>(px), iy = static_cast<int>(py);
-    return static_cast<std::ptrdiff_t>(gbuffer->index(ix, iy));
-}
-
-template <class Log>
-void Transport::deposit_camera(const Hit& hit, std::size_t index, const glm::dvec3& dir_in, double w,
-                               Accumulators& acc, Log& log) const {
-    const PixelInfo& pixel = pixel_info[index];
-    if (pixel.object != hit.object) return;   // also rejects pixels the G-buffer does not cover
-    glm::dvec3 to_camera = camera->position - hit.position;
-    const double dist = glm::length(to_camera);
-    if (!(dist > 0.0)) return;
-    to_camera /= dist;
-    // The camera must see the side the photon landed on.
-    const double side = glm::dot(dir_in, hit.geometric_normal) < 0.0 ? 1.0 : -1.0;
-    if (side * glm::dot(hit.geometric_normal, to_camera) <= 0.0) return;
-    const double cos_c = side * glm::dot(hit.shading_normal, to_camera);
-    if (cos_c <= 0.0) return;
-    log.ray(hit.position, to_camera, 0.0, dist * (1.0 - 1e-6), true);
-    if (tracer->occluded(hit.position, to_camera, 0.0, dist * (1.0 - 1e-6))) return;
-    // E_pixel += w / A_pix with A_pix = omega d^2 / cos; stored relative to the pixel's own G-buffer
-    // footprint so the fixed-point value stays near q.
-    const double x = w * pixel.scale * cos_c / (dist * dist);
-    add_fixed(acc.pixels[acc.pixel_offset + index], x);
 }
 
 double nrmse_of(const Image& e, const Image& se, const std::vector<std::uint8_t>* mask) {
@@ -339,18 +133,20 @@ Transport make_transport(const RayTracer& tracer, const ReceiverChart& chart, co
             transport.pixel_info[i] = {transport.pixel_scale[i], camera->object[i]};
         }
     }
+    detail::setup_media(transport, scene, camera_view && scene_scatters(scene));
     return transport;
 }
 
 // Traces indices [from, to) of every replica into `sums` (batches of one replica each, fixed order).
 void trace_photons(const Transport& transport, ReferenceSums& sums, std::uint64_t from, std::uint64_t to,
                    ProgressBar& progress) {
-    const std::size_t bins = sums.bins, pixels = sums.pixels;
+    const std::size_t bins = sums.bins, pixels = sums.pixels, volume_pixels = sums.volume_pixels;
     const std::uint32_t replicas = sums.replicas;
     tbb::enumerable_thread_specific<Accumulators> accumulators([&] {
         Accumulators a;
         a.bins.assign(bins * replicas, 0);
         a.pixels.assign(pixels * replicas, 0);
+        a.volume.assign(volume_pixels * replicas, 0);
         return a;
     });
     const std::uint64_t per_replica_batches = (to - from + kBatchSize - 1) / kBatchSize;
@@ -370,6 +166,7 @@ void trace_photons(const Transport& transport, ReferenceSums& sums, std::uint64_
                 Accumulators& acc = accumulators.local();
                 acc.bin_offset = replica * bins;
                 acc.pixel_offset = replica * pixels;
+                acc.volume_offset = replica * volume_pixels;
                 NoRayLog log;
                 for (std::size_t c = cr.begin(); c < cr.end(); ++c) {
                     FluxLedger ledger;
@@ -390,6 +187,7 @@ void trace_photons(const Transport& transport, ReferenceSums& sums, std::uint64_
     for (const Accumulators& a : accumulators) {
         for (std::size_t i = 0; i < a.bins.size(); ++i) sums.bin_sums[i] += a.bins[i];
         for (std::size_t i = 0; i < a.pixels.size(); ++i) sums.pixel_sums[i] += a.pixels[i];
+        for (std::size_t i = 0; i < a.volume.size(); ++i) detail::add_saturating(sums.volume_sums[i], a.volume[i]);
     }
     sums.per_replica = to;
 }
@@ -442,6 +240,16 @@ ReferenceResult finish_reference(const Transport& transport, const ReceiverChart
                       result.camera, result.camera_stderr, result.camera_replicas);
         result.noise_nrmse_camera = nrmse_of(result.camera, result.camera_stderr, &result.camera_covered);
     }
+    if (camera && sums->volume_pixels > 0 && !transport.volume_scale.empty()) {
+        // L_pix = (unit / (Omega_pix s_k)) sum x (reference_volume.cpp); every pixel is measured.
+        estimate_view(sums->volume_sums, sums->volume_pixels, sums->replicas, unit, camera->width, camera->height,
+                      [&](std::size_t k) {
+                          const int x = static_cast<int>(k % camera->width), y = static_cast<int>(k / camera->width);
+                          return camera_model->pixel_solid_angle(x, y) * transport.volume_scale[k];
+                      },
+                      result.camera_volume, result.camera_volume_stderr, result.camera_volume_replicas);
+        result.noise_nrmse_volume = nrmse_of(result.camera_volume, result.camera_volume_stderr, nullptr);
+    }
     // The ledger in watts: all replicas together are R n photons, L per light-set.
     const double watts = transport.scale * sums->lights / (static_cast<double>(sums->per_replica) * sums->replicas);
     const FluxLedger& u = sums->ledger_units;
@@ -471,10 +279,11 @@ void require_measurable(const Scene& scene, const ReferenceSums& sums, const Ref
                          std::to_string(result.photons) + " photons (of " + watts(l.emitted) + " emitted: on the receiver " +
                          watts(l.deposited_receiver) + ", on other objects " + watts(l.deposited_other) +
                          ", direct without a specular event " + watts(l.direct) + ", escaped " + watts(l.escaped) +
-                         ", absorbed " + watts(l.absorbed) + ", past max_specular_depth " + watts(l.truncated) +
+                         ", absorbed " + watts(l.absorbed) + ", scattered out by a medium " + watts(l.scattered) +
+                         ", past max_specular_depth " + watts(l.truncated) +
                          "); its reference would be all zeros with noise 0 and every error 0; valid: a scene whose "
                          "light reaches the receiver through a specular object (check the light's direction and "
-                         "position, the objects' positions and absorption), or more --photons");
+                         "position, the objects' positions, absorption and scattering), or more --photons");
 }
 
 // What the result says about how it was asked for and made.
@@ -526,9 +335,11 @@ ReferenceResult compute_reference(const RayTracer& tracer, const ReceiverChart& 
     sums->pixels = camera_view ? camera->covered.size() : 0;
     sums->bin_sums.assign(sums->bins * sums->replicas, 0);
     sums->pixel_sums.assign(sums->pixels * sums->replicas, 0);
+    sums->volume_pixels = transport.volume ? sums->pixels : 0;
+    sums->volume_sums.assign(sums->volume_pixels * sums->replicas, 0);
     if (start) {
         if (start->replicas != sums->replicas || start->lights != sums->lights || start->bins != sums->bins ||
-            start->pixels != sums->pixels)
+            start->pixels != sums->pixels || start->volume_pixels != sums->volume_pixels)
             throw std::runtime_error("reference: the reference to extend was made with other settings");
         *sums = *start;
     }
@@ -624,6 +435,7 @@ std::vector<RecordedRay> record_reference_rays(const RayTracer& tracer, const Re
     Accumulators acc;
     acc.bins.assign(static_cast<std::size_t>(chart.width()) * chart.height() * replicas, 0);
     if (camera_view) acc.pixels.assign(camera->covered.size() * replicas, 0);
+    if (transport.volume) acc.volume.assign(camera->covered.size() * replicas, 0);
     RayRecorder recorder;
     recorder.offset = scene_ray_offset(tracer.frame());
     FluxLedger ledger;
@@ -633,6 +445,7 @@ std::vector<RecordedRay> record_reference_rays(const RayTracer& tracer, const Re
     for (std::uint32_t r = 0; r < replicas; ++r) {
         acc.bin_offset = r * static_cast<std::size_t>(chart.width()) * chart.height();
         acc.pixel_offset = camera_view ? r * camera->covered.size() : 0;
+        acc.volume_offset = transport.volume ? r * camera->covered.size() : 0;
         for (std::uint64_t first = 0; first < per; first += kBatchSize) {
             const std::uint64_t last = std::min(per, first + kBatchSize);
             transport.batch_order(r, first, last, order, scratch);

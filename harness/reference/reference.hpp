@@ -3,8 +3,11 @@
 //
 // Photons leave the light (directional: uniformly over a rectangle perpendicular to the light that
 // covers the specular objects' footprint; point: uniformly in the cone around the specular objects),
-// follow specular refraction/reflection (Fresnel and absorption where the scene asks) and deposit on the
-// first diffuse object they reach after at least one specular event. The sample values come from
+// follow specular refraction/reflection (Fresnel where the scene asks), lose exp(-sigma_t l) of their flux
+// over every segment in a medium (absorption and scattering, reference_transport.cpp) and deposit on the
+// first diffuse object they reach after at least one specular event. Where a medium scatters, each
+// segment after a specular event in the camera's medium also adds one scattering point, connected to the
+// pinhole, to the volume caustic radiance camera_volume (reference_volume.cpp). The sample values come from
 // photon_sampler.hpp (randomized quasi-Monte Carlo by default) in R independent replicas; the per-bin
 // standard error is the spread between replicas (R - 1 degrees of freedom). Deposits are accumulated in
 // fixed point, so the result is bit-identical for any thread count, and a reference can be extended with
@@ -37,6 +40,10 @@ struct FluxLedger {
         return deposited_receiver + deposited_other + direct + escaped + absorbed + scattered + truncated;
     }
 };
+
+// camera_volume leaves out scattering closer than this to the pinhole [m]: the volume view's near
+// distance (frame/camera.hpp), where 1/r^2 would otherwise have infinite variance (reference_volume.cpp).
+constexpr double kVolumeMinDistance = kVolumeNearDistance;
 
 struct ReferenceSettings {
     // Photons over all replicas, rounded up to a multiple of replicas x lights. With a noise target it is

@@ -2,7 +2,8 @@
 //
 // Key: a 128-bit hash of everything the reference depends on (scene bytes, every asset's bytes, frame,
 // photons, seed, camera view, receiver and camera sizes, kReferenceVersion).
-// File cache_dir/<key>.ref:
+// The payload: the integer sums of every view (receiver, camera, camera_volume) and the flux ledger,
+// scattered share included. File cache_dir/<key>.ref:
 //   magic "CAUSREF\n" | u32 file format | u32 kReferenceVersion | key (u64 length + bytes)
 //   | u64 payload size | payload | u64 checksum64(payload)
 // Anything that does not match exactly (truncation, flipped bits, another version, another key) makes
@@ -28,7 +29,8 @@ namespace caustics {
 namespace {
 
 // Bump whenever reference.cpp changes what it computes (transport, estimators, sampling).
-constexpr std::uint32_t kReferenceVersion = 3;   // 3: replicas, quasi-Monte Carlo sampler, sums stored
+// 3: replicas, quasi-Monte Carlo sampler, sums stored; 4: media (extinction, the scattered ledger, camera_volume)
+constexpr std::uint32_t kReferenceVersion = 4;
 constexpr std::uint32_t kFileFormat = 2;
 constexpr char kMagic[8] = {'C', 'A', 'U', 'S', 'R', 'E', 'F', '\n'};
 
@@ -98,16 +100,20 @@ std::string serialize_payload(const ReferenceResult& r) {
     const ReferenceSums& sums = *r.sums;
     Writer w;
     // Sized exactly: growing by doubling held up to three times the sums at once.
-    w.out.reserve(64 + (sums.bin_sums.size() + sums.pixel_sums.size()) * sizeof(std::int64_t) + 10 * sizeof(double));
+    w.out.reserve(72 + (sums.bin_sums.size() + sums.pixel_sums.size() + sums.volume_sums.size()) * sizeof(std::int64_t) +
+                  11 * sizeof(double));
     w.u64(sums.per_replica);
     w.u32(sums.replicas);
     w.u32(sums.lights);
     w.u64(sums.bins);
     w.u64(sums.pixels);
+    w.u64(sums.volume_pixels);
     w.raw(sums.bin_sums.data(), sums.bin_sums.size() * sizeof(std::int64_t));
     w.raw(sums.pixel_sums.data(), sums.pixel_sums.size() * sizeof(std::int64_t));
+    w.raw(sums.volume_sums.data(), sums.volume_sums.size() * sizeof(std::int64_t));
     const FluxLedger& l = sums.ledger_units;
-    for (double v : {l.emitted, l.deposited_receiver, l.deposited_other, l.direct, l.escaped, l.absorbed, l.truncated})
+    for (double v : {l.emitted, l.deposited_receiver, l.deposited_other, l.direct, l.escaped, l.absorbed, l.scattered,
+                     l.truncated})
         w.f64(v);
     w.f64(r.noise_nrmse);
     w.u64(r.seed);
@@ -130,18 +136,23 @@ CachedEntry parse_payload(Reader& in) {
     s.lights = in.u32();
     s.bins = in.u64();
     s.pixels = in.u64();
-    // Sizes are checked against what is left before anything is allocated.
-    const std::uint64_t words = (static_cast<std::uint64_t>(s.bins) + s.pixels) * s.replicas;
+    s.volume_pixels = in.u64();
+    // Sizes are checked against what is left before anything is allocated. The volume view is the
+    // camera's pixels or nothing.
     if (s.replicas == 0 || s.per_replica == 0 || s.bins > in.remaining() || s.pixels > in.remaining() ||
-        words > in.remaining() / sizeof(std::int64_t))
+        (s.volume_pixels != 0 && s.volume_pixels != s.pixels))
         throw Corrupt{};
+    const std::uint64_t words = (static_cast<std::uint64_t>(s.bins) + s.pixels + s.volume_pixels) * s.replicas;
+    if (words > in.remaining() / sizeof(std::int64_t)) throw Corrupt{};
     s.bin_sums.resize(s.bins * s.replicas);
     s.pixel_sums.resize(s.pixels * s.replicas);
+    s.volume_sums.resize(s.volume_pixels * s.replicas);
     in.raw(s.bin_sums.data(), s.bin_sums.size() * sizeof(std::int64_t));
     in.raw(s.pixel_sums.data(), s.pixel_sums.size() * sizeof(std::int64_t));
+    in.raw(s.volume_sums.data(), s.volume_sums.size() * sizeof(std::int64_t));
     FluxLedger& l = s.ledger_units;
     for (double* v : {&l.emitted, &l.deposited_receiver, &l.deposited_other, &l.direct, &l.escaped, &l.absorbed,
-                      &l.truncated})
+                      &l.scattered, &l.truncated})
         *v = in.f64();
     e.noise_nrmse = in.f64();
     e.seed = in.u64();
@@ -267,12 +278,13 @@ std::vector<EntryFile> entries_of(const std::string& cache_dir, const std::strin
 
 // Reads an entry; null (and a message) when it is damaged, stale or made for other sizes.
 std::shared_ptr<const ReferenceSums> read_entry(const EntryFile& file, const std::string& key, std::size_t bins,
-                                                std::size_t pixels, const ReferenceSettings& settings,
-                                                std::size_t lights, double& noise) {
+                                                std::size_t pixels, std::size_t volume_pixels,
+                                                const ReferenceSettings& settings, std::size_t lights, double& noise) {
     std::string bytes;
     CachedEntry entry;
     if (read_file_bytes(file.path.string(), bytes) && decode_file(bytes, key, entry) && entry.sums->bins == bins &&
-        entry.sums->pixels == pixels && entry.sums->replicas == static_cast<std::uint32_t>(settings.replicas) &&
+        entry.sums->pixels == pixels && entry.sums->volume_pixels == volume_pixels &&
+        entry.sums->replicas == static_cast<std::uint32_t>(settings.replicas) &&
         entry.sums->lights == lights && entry.sums->per_replica * entry.sums->replicas == file.photons &&
         measured_something(*entry.sums)) {
         noise = entry.noise_nrmse;
@@ -325,6 +337,7 @@ ReferenceResult load_or_compute_reference(const FrameGeometry& frame, const RayT
     const std::size_t lights = frame.scene->lights.size();
     const std::size_t bins = static_cast<std::size_t>(chart.width()) * chart.height();
     const std::size_t pixels = keyed.camera_view ? camera->covered.size() : 0;
+    const std::size_t volume_pixels = scene_scatters(*frame.scene) ? pixels : 0;   // camera_volume (reference.cpp)
     const std::uint64_t wanted = photons_per_replica(settings.photons, settings.replicas, lights) *
                                  static_cast<std::uint64_t>(std::max(1, settings.replicas));
     const bool target = settings.noise_target > 0.0;
@@ -334,7 +347,7 @@ ReferenceResult load_or_compute_reference(const FrameGeometry& frame, const RayT
     for (const EntryFile& file : entries_of(cache_dir, key)) {
         if (!target && file.photons > wanted) break;
         double noise = 0.0;
-        std::shared_ptr<const ReferenceSums> sums = read_entry(file, key, bins, pixels, keyed, lights, noise);
+        std::shared_ptr<const ReferenceSums> sums = read_entry(file, key, bins, pixels, volume_pixels, keyed, lights, noise);
         if (!sums) continue;
         const bool answers = target ? (noise <= settings.noise_target || file.photons >= settings.photon_cap)
                                     : file.photons == wanted;

@@ -1,0 +1,121 @@
+#pragma once
+// The reference light tracer's per-photon transport, shared by reference.cpp (batches, estimates),
+// reference_transport.cpp (the photon's path) and reference_volume.cpp (media: extinction and the
+// camera_volume view). Private to the reference layer.
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include <caustics/frame/camera.hpp>
+#include <caustics/frame/frame.hpp>
+#include <caustics/frame/ray_tracer.hpp>
+#include <caustics/frame/receiver_chart.hpp>
+#include <caustics/reference/photon_sampler.hpp>
+#include <caustics/reference/photon_source.hpp>
+#include <caustics/reference/reference.hpp>
+#include <caustics/reference/reference_rays.hpp>
+#include <caustics/scene/scene.hpp>
+
+namespace caustics::detail {
+
+// One photon's normalised weight q (<= 1) becomes an integer of at most 2^30: 1e9 photons in one bin of
+// one replica stay below 2^60, and each contribution keeps ~2^-30 relative precision.
+constexpr double kFixedScale = 1073741824.0;  // 2^30
+
+inline void add_fixed(std::int64_t& acc, double x) {
+    // x >= 0: adding 1/2 and truncating rounds to nearest, without a libm call.
+    acc += static_cast<std::int64_t>(x * kFixedScale + 0.5);
+}
+
+// Ray logs: NoRayLog compiles away; RayRecorder keeps every query for bench/ replays.
+struct NoRayLog {
+    void ray(const glm::dvec3&, const glm::dvec3&, double, double, bool) {}
+};
+
+struct RayRecorder {
+    double offset = 0.0;   // the tracer's own minimum tnear
+    std::vector<RecordedRay> rays;
+    void ray(const glm::dvec3& o, const glm::dvec3& d, double tmin, double tmax, bool shadow) {
+        RecordedRay r;
+        for (int i = 0; i < 3; ++i) r.origin[i] = static_cast<float>(o[i]), r.dir[i] = static_cast<float>(d[i]);
+        r.tnear = static_cast<float>(std::max(tmin, offset));
+        r.tfar = tmax >= 3e38 ? std::numeric_limits<float>::infinity() : static_cast<float>(tmax);
+        r.shadow = shadow;
+        rays.push_back(r);
+    }
+};
+
+// Per replica, bin / pixel: the sum of round(2^30 q). A batch belongs to one replica, so a thread adds
+// into the slice of the replica it is tracing (`replica` offsets).
+struct Accumulators {
+    std::vector<std::int64_t> bins;     // receiver, replica-major
+    std::vector<std::int64_t> pixels;   // camera, replica-major
+    std::vector<std::int64_t> volume;   // camera_volume, replica-major (empty: not measured)
+    std::size_t bin_offset = 0, pixel_offset = 0, volume_offset = 0;
+};
+
+// What a camera deposit needs of one pixel, packed so that it costs one cache miss: the pixel's
+// G-buffer footprint factor (d_c^2 / cos_c) and the primary-hit object (-1 where not covered).
+struct PixelInfo {
+    double scale = 0.0;
+    int object = -1;
+};
+
+// Everything one photon needs, shared read-only by all threads.
+struct Transport {
+    const RayTracer* tracer = nullptr;
+    const FrameGeometry* frame = nullptr;
+    const ReceiverChart* chart = nullptr;
+    const CameraGBuffer* gbuffer = nullptr;
+    const CameraModel* camera = nullptr;
+    std::vector<double> pixel_scale;   // camera: d_c^2 / cos_c of each pixel's G-buffer point
+    std::vector<PixelInfo> pixel_info; // camera: pixel_scale and G-buffer object, packed
+    std::vector<Emitter> emitters;
+    std::vector<double> start_weight;  // q of a photon of each light as it leaves (power / largest power)
+    double scale = 1.0;                // the largest light's power [W]: converts q sums to flux
+    double outside_ior = 1.0;
+    int receiver_object = -1;
+    int max_depth = 8;
+    bool fresnel = false;
+    std::uint64_t seed = 1;
+    SamplerKind sampler = SamplerKind::Sobol;
+    // Media (reference_volume.cpp): media[object + 1] is medium_at(scene, object), [0] the outside.
+    std::vector<MediumCoefficients> media;
+    // camera_volume: measured when `volume` (the scene scatters and the camera view is asked).
+    bool volume = false;
+    int camera_medium = -1;             // CameraGBuffer::medium_object
+    std::vector<double> volume_scale;   // per pixel: s_k [m^2] (reference_volume.cpp)
+
+    // Photon i of a replica belongs to light i mod L and is that light's sample i / L.
+    PhotonSampler sampler_of(std::uint32_t replica, std::uint64_t i) const {
+        return PhotonSampler(sampler, seed + 0x51ED270B27D5A3C1ull * (i % emitters.size()), replica, i / emitters.size());
+    }
+    void batch_order(std::uint32_t replica, std::uint64_t first, std::uint64_t last, std::vector<std::uint32_t>& order,
+                     std::vector<std::uint32_t>& scratch) const;
+    template <class Log>
+    void trace(std::uint32_t replica, std::uint64_t i, FluxLedger& ledger, Accumulators& acc, Log& log) const;
+    // The pixel a deposit at p would land in, or -1 (outside the image or behind the camera).
+    std::ptrdiff_t camera_pixel(const glm::dvec3& p) const;
+    template <class Log>
+    void deposit_camera(const Hit& hit, std::size_t index, const glm::dvec3& dir_in, double w, Accumulators& acc,
+                        Log& log) const;
+    // camera_volume: one scattering point on the segment origin + t dir, t in [0, length) (length may
+    // be infinite), of a photon of weight w at the segment's start; `u` is its sample value.
+    template <class Log>
+    void scatter_to_camera(const glm::dvec3& origin, const glm::dvec3& dir, double length, double w, double u,
+                           const MediumCoefficients& medium, Accumulators& acc, Log& log) const;
+};
+
+// The media and, when `volume`, the camera_volume set-up of `transport` (reference_volume.cpp).
+void setup_media(Transport& transport, const Scene& scene, bool volume);
+
+// Saturating sum of non-negative fixed-point values (camera_volume; see reference_volume.cpp).
+inline void add_saturating(std::int64_t& acc, std::int64_t x) {
+    if (__builtin_add_overflow(acc, x, &acc)) acc = std::numeric_limits<std::int64_t>::max();
+}
+
+}  // namespace caustics::detail

@@ -1,0 +1,184 @@
+// One photon's path through the scene (DESIGN.md section 5): emission, specular refraction and
+// reflection (Fresnel by Russian roulette where the scene asks), extinction in media, the camera_volume
+// scattering points (reference_volume.cpp) and the deposit on the first diffuse object after at least
+// one specular event. See reference.cpp for the determinism and noise contract.
+//
+// Media: on every segment, the medium is medium_at(scene, inside) (inside: the dielectric the photon is
+// in, -1 outside it). The photon keeps exp(-sigma_t l) of its weight over a segment of length l; what
+// it loses is booked as absorbed (share sigma_a / sigma_t) and scattered (sigma_s / sigma_t). A photon
+// that leaves the scene (no hit) travels an infinite segment: in a medium with sigma_t > 0 all of it is
+// extinct (nothing escapes through an infinite absorbing or scattering medium, and the camera_volume
+// view integrates such segments to infinity too). A directional light's photons start on its emission
+// rectangle just outside the scene's bounds (photon_source.cpp): in a scene-wide medium its irradiance
+// E0 is the one that enters the scene's bounds.
+#include "detail/transport.hpp"
+
+#include <cmath>
+
+namespace caustics::detail {
+namespace {
+
+// Unpolarised Fresnel reflectance of a dielectric interface.
+double fresnel_reflectance(double cos_i, double cos_t, double n_i, double n_t) {
+    const double rs = (n_i * cos_i - n_t * cos_t) / (n_i * cos_i + n_t * cos_t);
+    const double rp = (n_t * cos_i - n_i * cos_t) / (n_t * cos_i + n_i * cos_t);
+    return 0.5 * (rs * rs + rp * rp);
+}
+
+}  // namespace
+
+void Transport::batch_order(std::uint32_t replica, std::uint64_t first, std::uint64_t last,
+                            std::vector<std::uint32_t>& order, std::vector<std::uint32_t>& scratch) const {
+    photon_batch_order(
+        emitters.size(), first, last,
+        [&](std::uint64_t i, double& u1, double& u2) {
+            const PhotonSampler s = sampler_of(replica, i);
+            u1 = s.get(0), u2 = s.get(1);
+        },
+        order, scratch);
+}
+
+template <class Log>
+void Transport::trace(std::uint32_t replica, std::uint64_t i, FluxLedger& ledger, Accumulators& acc, Log& log) const {
+    const PhotonSampler rng = sampler_of(replica, i);
+    const std::size_t light = emitters.size() == 1 ? 0 : static_cast<std::size_t>(i % emitters.size());
+    const Emitter& emitter = emitters[light];
+    glm::dvec3 origin, dir;
+    emitter.sample(rng.get(0), rng.get(1), origin, dir);
+    const double u_dispersion = rng.get(2);
+    // Dimensions 3, 4, ... in the order of use: each Fresnel choice, and each segment after a specular
+    // event in a scattering medium (its camera_volume scattering point, drawn whether or not the view
+    // is measured so that the other views do not depend on it). Scenes without scattering read exactly
+    // the dimensions they read before media existed.
+    int next_dim = 3;
+    double w = start_weight[light];
+    ledger.emitted += w;
+
+    const auto& objects = frame->scene->objects;
+    int depth = 0;       // specular events so far
+    int inside = -1;     // dielectric object the photon travels in (-1: outside medium)
+    for (;;) {
+        log.ray(origin, dir, 1e-6, 1e30, false);
+        const Hit hit = tracer->intersect(origin, dir);
+        const MediumCoefficients& medium = media[static_cast<std::size_t>(inside + 1)];
+        const double sigma_t = medium.extinction();
+        if (sigma_t > 0.0) {
+            const double length = hit.valid ? hit.t : std::numeric_limits<double>::infinity();
+            if (depth > 0 && medium.scatters()) {
+                const double u = rng.get(next_dim++);
+                if (volume && inside == camera_medium) scatter_to_camera(origin, dir, length, w, u, medium, acc, log);
+            }
+            // Beer-Lambert with extinction; an absorbing-only medium books exactly what it did before.
+            const double kept = hit.valid ? w * std::exp(-sigma_t * length) : 0.0;
+            const double lost = w - kept;
+            const double absorbed = medium.scattering > 0.0 ? lost * (medium.absorption / sigma_t) : lost;
+            ledger.absorbed += absorbed;
+            ledger.scattered += lost - absorbed;
+            w = kept;
+        }
+        if (!hit.valid) {
+            ledger.escaped += w;
+            return;
+        }
+        const Material& material = objects[static_cast<std::size_t>(hit.object)].material;
+        if (material.type == MaterialType::Diffuse) {
+            if (depth == 0) {
+                ledger.direct += w;
+                return;
+            }
+            // The camera pixel's data is fetched first (prefetch) so that its cache misses overlap the
+            // receiver deposit's.
+            std::ptrdiff_t pixel = -1;
+            if (camera) {
+                pixel = camera_pixel(hit.position);
+                if (pixel >= 0) {
+                    __builtin_prefetch(&pixel_info[static_cast<std::size_t>(pixel)]);
+                    __builtin_prefetch(&acc.pixels[acc.pixel_offset + static_cast<std::size_t>(pixel)], 1);
+                }
+            }
+            if (hit.object == receiver_object) {
+                ledger.deposited_receiver += w;
+                const int bin = chart->bin_of(hit.position);
+                if (bin >= 0) add_fixed(acc.bins[acc.bin_offset + static_cast<std::size_t>(bin)], w);
+            } else {
+                ledger.deposited_other += w;
+            }
+            if (pixel >= 0) deposit_camera(hit, static_cast<std::size_t>(pixel), dir, w, acc, log);
+            return;
+        }
+        if (depth >= max_depth) {
+            ledger.truncated += w;
+            return;
+        }
+        ++depth;
+
+        const bool from_outside = glm::dot(dir, hit.geometric_normal) < 0.0;
+        // Normal on the side the photon arrives from; fall back to the geometric one where the
+        // interpolated normal disagrees with the side (grazing hits on coarse meshes).
+        glm::dvec3 n = from_outside ? hit.shading_normal : -hit.shading_normal;
+        double cos_i = -glm::dot(dir, n);
+        if (cos_i <= 0.0) {
+            n = from_outside ? hit.geometric_normal : -hit.geometric_normal;
+            cos_i = -glm::dot(dir, n);
+        }
+        const glm::dvec3 reflected = dir + 2.0 * cos_i * n;
+        if (material.type == MaterialType::Mirror) {
+            dir = glm::normalize(reflected);
+            origin = hit.position;
+            continue;   // the medium does not change at a mirror
+        }
+        const double ior = material.ior + material.dispersion * u_dispersion;
+        const double n_i = from_outside ? outside_ior : ior;
+        const double n_t = from_outside ? ior : outside_ior;
+        const double eta = n_i / n_t;
+        const double sin2_t = eta * eta * (1.0 - cos_i * cos_i);
+        bool reflect = sin2_t >= 1.0;   // total internal reflection
+        double cos_t = 0.0;
+        if (!reflect) {
+            cos_t = std::sqrt(1.0 - sin2_t);
+            // Fresnel by Russian roulette: unbiased and flux conserving, one path per photon.
+            if (fresnel) reflect = rng.get(next_dim++) < fresnel_reflectance(cos_i, cos_t, n_i, n_t);
+        }
+        dir = reflect ? reflected : eta * dir + (eta * cos_i - cos_t) * n;
+        dir = glm::normalize(dir);
+        origin = hit.position;
+        // Inside or outside is decided by where the new direction actually points.
+        inside = glm::dot(dir, hit.geometric_normal) < 0.0 ? hit.object : -1;
+    }
+}
+
+std::ptrdiff_t Transport::camera_pixel(const glm::dvec3& p) const {
+    double px, py;
+    if (!camera->project(p, px, py)) return -1;
+    if (!(px >= 0.0 && py >= 0.0 && px < gbuffer->width && py < gbuffer->height)) return -1;
+    const int ix = static_cast<int>(px), iy = static_cast<int>(py);
+    return static_cast<std::ptrdiff_t>(gbuffer->index(ix, iy));
+}
+
+template <class Log>
+void Transport::deposit_camera(const Hit& hit, std::size_t index, const glm::dvec3& dir_in, double w,
+                               Accumulators& acc, Log& log) const {
+    const PixelInfo& pixel = pixel_info[index];
+    if (pixel.object != hit.object) return;   // also rejects pixels the G-buffer does not cover
+    glm::dvec3 to_camera = camera->position - hit.position;
+    const double dist = glm::length(to_camera);
+    if (!(dist > 0.0)) return;
+    to_camera /= dist;
+    // The camera must see the side the photon landed on.
+    const double side = glm::dot(dir_in, hit.geometric_normal) < 0.0 ? 1.0 : -1.0;
+    if (side * glm::dot(hit.geometric_normal, to_camera) <= 0.0) return;
+    const double cos_c = side * glm::dot(hit.shading_normal, to_camera);
+    if (cos_c <= 0.0) return;
+    log.ray(hit.position, to_camera, 0.0, dist * (1.0 - 1e-6), true);
+    if (tracer->occluded(hit.position, to_camera, 0.0, dist * (1.0 - 1e-6))) return;
+    // E_pixel += w / A_pix with A_pix = omega d^2 / cos; stored relative to the pixel's own G-buffer
+    // footprint so the fixed-point value stays near q.
+    const double x = w * pixel.scale * cos_c / (dist * dist);
+    add_fixed(acc.pixels[acc.pixel_offset + index], x);
+}
+
+template void Transport::trace<NoRayLog>(std::uint32_t, std::uint64_t, FluxLedger&, Accumulators&, NoRayLog&) const;
+template void Transport::trace<RayRecorder>(std::uint32_t, std::uint64_t, FluxLedger&, Accumulators&,
+                                            RayRecorder&) const;
+
+}  // namespace caustics::detail
