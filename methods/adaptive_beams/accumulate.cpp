@@ -194,7 +194,8 @@ void accumulate_camera(const BeamSet& set, const Scene& scene, const CameraGBuff
                             const double s_max = g.object[i] >= 0 ? glm::length(glm::dvec3(g.position[i]) - cam.position)
                                                                   : std::numeric_limits<double>::infinity();
                             volume->at(x, y) += static_cast<float>(
-                                volume_radiance(b, cam_medium, cam.position, w, s_max, s.volume_samples, counters));
+                                volume_radiance(b, cam_medium, cam.position, w, s_max, s.volume_samples, counters,
+                                                kVolumeNearDistance));
                         }
                         if ((use[n] & 2) && g.covered[i])
                             surface->at(x, y) += static_cast<float>(surface_irradiance(

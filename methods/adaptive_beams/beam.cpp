@@ -183,12 +183,12 @@ double surface_irradiance(const Beam& b, double sigma_t, const glm::dvec3& x, co
 }
 
 double volume_radiance(const Beam& b, const MediumCoefficients& medium, const glm::dvec3& o, const glm::dvec3& w,
-                       double s_max, int samples, BeamCounters& counters) {
+                       double s_max, int samples, BeamCounters& counters, double s_min) {
     const glm::dvec3 r0 = o - b.c;
     const double yo = glm::dot(r0, b.n), yw = glm::dot(w, b.n);
     const glm::dvec2 q0{glm::dot(r0, b.e1), glm::dot(r0, b.e2)}, qw{glm::dot(w, b.e1), glm::dot(w, b.e2)};
     // Bound s by the slab y in [y0, y1] (or, for a ray parallel to it, by the hull's bounding sphere).
-    double s_lo = 0.0, s_hi = s_max;
+    double s_lo = s_min, s_hi = s_max;
     if (std::abs(yw) > 1e-12) {
         double sa = (b.y0 - yo) / yw, sb = (b.y1 - yo) / yw;
         if (sa > sb) std::swap(sa, sb);

@@ -71,12 +71,12 @@ double surface_irradiance(const Beam& b, double sigma_t, const glm::dvec3& x, co
                           double end_tol, BeamCounters& counters);
 
 // Radiance [W/(m^2 sr)] scattered once towards the camera at o by the beam along the camera ray
-// o + s w, s in [0, s_max] (Sec. 5, first equation): the exact interval(s) where the ray is inside the
+// o + s w, s in [s_min, s_max] (Sec. 5, first equation): the exact interval(s) where the ray is inside the
 // beam (roots of the three edge functions and of A, quadratic in s), each integrated by Gauss-Legendre
 // with `samples` points (1: the paper's midpoint), with extinction along the light's path in the beam and
 // towards the camera, and the Henyey-Greenstein phase function.
 double volume_radiance(const Beam& b, const MediumCoefficients& medium, const glm::dvec3& o, const glm::dvec3& w,
-                       double s_max, int samples, BeamCounters& counters);
+                       double s_max, int samples, BeamCounters& counters, double s_min = 0.0);
 
 enum class HullType { Tight, Prism };
 
