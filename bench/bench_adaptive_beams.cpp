@@ -1,0 +1,82 @@
+// adaptive_beams speed (Liktor and Dachsbacher 2011, Table 1: 22 to 26 fps at 1024 x 768 with 1,600 to
+// 5,300 beams on a GTX 470; goal here: 22 fps on sphere_fog on 2 cores): render() after update() at the
+// scenes' 1024 x 768 camera (pool_murky's 640 x 480 scaled to it), all three views, with the stages
+// (beam generation, camera beams = volume accumulation with the camera's surface caustics, receiver
+// surface caustics) as counters. Families: the scene (0 sphere_fog, 1 pool_murky), adaptive (16, 3 levels)
+// against the uniform 64 x 64 grid (beams and fill), and the tight hull against the prism (fill and time).
+#include <benchmark/benchmark.h>
+
+#include <map>
+#include <memory>
+#include <string>
+
+#include <tbb/global_control.h>
+
+#include <caustics/api/registry.hpp>
+#include <caustics/frame/camera.hpp>
+#include <caustics/frame/frame.hpp>
+#include <caustics/frame/ray_tracer.hpp>
+#include <caustics/frame/receiver_chart.hpp>
+
+using namespace caustics;
+
+namespace {
+
+struct Fixture {
+    Scene scene;
+    FrameGeometry frame;
+    ReceiverChart chart;
+    std::unique_ptr<RayTracer> tracer;
+    CameraGBuffer gbuffer;
+    explicit Fixture(const std::string& name)
+        : scene(load(name)), frame(build_frame_geometry(scene, 0)), chart(frame, 256, 256) {
+        tracer = std::make_unique<RayTracer>(frame);
+        gbuffer = build_camera_gbuffer(*tracer, scene.camera);
+    }
+    static Scene load(const std::string& name) {
+        Scene s = load_scene(std::string(CAUSTICS_SOURCE_DIR) + "/scenes/" + name + ".json");
+        s.camera.width = 1024;
+        s.camera.height = 768;
+        return s;
+    }
+    static Fixture& get(int which) {
+        static Fixture fog("sphere_fog"), pool("pool_murky");
+        return which == 0 ? fog : pool;
+    }
+};
+
+void run(benchmark::State& state, const std::map<std::string, std::string>& params) {
+    tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, 2);
+    Fixture& f = Fixture::get(static_cast<int>(state.range(0)));
+    const MethodInfo& info = require_method("adaptive_beams");
+    auto method = info.create(ParamSet::resolve(info.name, info.params, params));
+    method->prepare(f.scene);
+    method->update(f.frame);
+    RenderRequest request;
+    request.receiver = &f.chart;
+    request.camera = &f.gbuffer;
+    request.camera_volume = true;
+    benchmark::DoNotOptimize(method->render(f.frame, request));
+    std::map<std::string, double> stages;
+    CausticOutput last;
+    for (auto _ : state) {
+        last = method->render(f.frame, request);
+        for (const auto& [name, ms] : last.stages_ms) stages[name] += ms;
+    }
+    for (const auto& [name, ms] : stages) state.counters[name + "_ms"] = ms / static_cast<double>(state.iterations());
+    state.counters["beams"] = static_cast<double>(last.health.get("beams_generated"));
+    state.counters["fill"] = static_cast<double>(last.health.get("fill"));
+    state.SetLabel(state.range(0) == 0 ? "sphere_fog" : "pool_murky");
+}
+
+void BM_Adaptive(benchmark::State& state) { run(state, {}); }
+void BM_Uniform64(benchmark::State& state) { run(state, {{"adaptive", "false"}, {"grid", "64"}}); }
+void BM_Prism(benchmark::State& state) { run(state, {{"hull", "prism"}}); }
+
+}  // namespace
+
+BENCHMARK(BM_Adaptive)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Repetitions(3)->ReportAggregatesOnly(true)->UseRealTime();
+BENCHMARK(BM_Uniform64)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Repetitions(3)->ReportAggregatesOnly(true)->UseRealTime();
+BENCHMARK(BM_Prism)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Repetitions(3)->ReportAggregatesOnly(true)->UseRealTime();
+
+BENCHMARK_MAIN();

@@ -1,0 +1,45 @@
+#pragma once
+// Accumulating the beams (Sec. 5): each beam's bounding hull is scan-converted into the camera (pixel
+// centres inside the projection of the hull, near-clipped), and every pixel it touches gets the beam's
+// in-scattered radiance along its primary ray (Sec. 5.1, 5.2) and, where the pixel sees a diffuse surface,
+// the beam's irradiance there by point-in-beam (Sec. 5.3), low-pass filtered afterwards (Sec. 7). The
+// receiver map takes the same point-in-beam test at stratified points of each bin.
+//
+// Parallel over bands of rows; each band walks the beams in their order, so the sums are the same for
+// any thread count.
+#include <cstdint>
+
+#include <caustics/frame/camera.hpp>
+#include <caustics/frame/receiver_chart.hpp>
+#include <caustics/util/image.hpp>
+
+#include "light_grid.hpp"
+
+namespace caustics::adaptive_beams {
+
+struct AccumulateSettings {
+    HullType hull = HullType::Tight;
+    int volume_samples = 2;     // Gauss-Legendre points per ray-beam interval (1: the paper's midpoint)
+    int receiver_samples = 3;   // stratified point-in-beam samples per bin side on the receiver map
+    int filter = 1;             // camera surface caustics: tent filter radius [pixels], 0 = none
+    double end_tol = 0.05;      // a surface point may lie this fraction of a beam's length past its end
+};
+
+struct AccumulateStats {
+    std::int64_t fill = 0;            // camera pixels touched by hulls (fragments)
+    std::int64_t clamped = 0;         // evaluations at a focus where |A| was clamped
+    std::int64_t near_clipped = 0;    // hulls cut by the camera's near plane (beams that leave the frustum behind it)
+    std::int64_t offscreen = 0;       // hulls wholly outside the image (beams that leave the frustum)
+    std::int64_t prism_fallback = 0;  // prism hull not formed: the tight corners were used
+};
+
+// Fills `surface` (E_c at covered pixels, when non-null) and `volume` (L_v, when non-null), both sized to
+// the G-buffer; `camera_medium` is the medium the primary rays travel in.
+void accumulate_camera(const BeamSet& set, const Scene& scene, const CameraGBuffer& gbuffer, const AccumulateSettings& s,
+                       Image* surface, Image* volume, AccumulateStats& stats);
+
+// Fills the receiver map (chart width x height, mean E_c per bin).
+void accumulate_receiver(const BeamSet& set, const Scene& scene, const ReceiverChart& chart, const AccumulateSettings& s,
+                         Image& receiver, AccumulateStats& stats);
+
+}  // namespace caustics::adaptive_beams

@@ -1,0 +1,97 @@
+#pragma once
+// The hierarchical projected grid (Sec. 4.1, 4.2) and the beams it generates (Sec. 4.3, 6).
+//
+// The grid lives in the light's image space (an orthographic view for a directional light, a perspective
+// one for a point light, harness/blocks/gbuffer/light_projection.hpp). Each grid vertex is the light ray
+// through it, followed through the specular objects: its first hit (the light G-buffer's position, normal,
+// depth and object, Sec. 4.1), the refraction or reflection there and, inside a closed dielectric, the
+// second refraction on the way out (two-sided refraction, Sec. 6), up to the first diffuse surface or the
+// extrusion limit. A cell is split (Sec. 4.2) where its corners disagree (silhouette, another object,
+// total internal reflection), where depth or normal jump, where the light's hits at its edge midpoints
+// leave the bilinear beam (Sec. 6), where its beam converges strongly for its share of the light, and
+// where the beam is wide as seen from the camera.
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include <caustics/blocks/gbuffer/light_projection.hpp>
+#include <caustics/frame/frame.hpp>
+#include <caustics/frame/ray_tracer.hpp>
+
+#include "beam.hpp"
+
+namespace caustics::adaptive_beams {
+
+constexpr int kMaxSegments = 3;
+constexpr std::uint8_t kEndsOnDiffuse = 1, kEndsOnReceiver = 2, kAllOnReceiver = 4, kReceiverOrNothing = 8;
+
+// One light ray followed through the specular objects (a vertex of the projected grid).
+struct LightPath {
+    enum Status : std::uint8_t { Missed, Ok, TotalInternalReflection, Lost };
+    Status status = Missed;   // Missed: the first hit is not specular (or nothing); Lost: met a second specular object
+    int object = -1;          // first specular object hit
+    double depth = 0.0;       // distance from the light (orthographic: from its image plane)
+    glm::dvec3 normal{0.0};   // shading normal at the first hit
+    int segments = 0;
+    std::array<EdgeRay, kMaxSegments> seg{};
+    std::array<int, kMaxSegments> medium{};   // object whose inside holds the segment, -1 outside
+    std::array<int, kMaxSegments> end_object{};   // what the segment ends on (-1: the extrusion limit)
+};
+
+struct GridSettings {
+    int grid = 16;                   // initial cells per side
+    int iterations = 3;              // refinement levels
+    bool adaptive = true;            // false: the uniform grid x grid (no refinement)
+    double depth_threshold = 2.0;    // split: depth jump across a cell > this x its width
+    double normal_threshold_deg = 15.0;   // split: corner normals further apart than this
+    double focus_ratio = 1.0;        // split: the beam's end section is below 1 / (this 4^level) of its start
+    double deviation = 0.05;         // split: a midpoint's hit is off the beam's by more than this x the cell's end size
+    double camera_angle = 0.05;      // split: the beam's width seen from the camera [rad] above this
+    double clamp_ratio = 1e-3;       // |A| >= this x the start area
+    double energy_cutoff = 1e-3;     // extrusion ends (and faint beams are discarded) below this
+};
+
+struct GridStats {
+    std::int64_t beams_generated = 0, beams_split = 0, discarded_tir = 0, discarded_energy = 0, flipped = 0,
+                 degenerate = 0, lost = 0, cells = 0;
+};
+
+// The beams of one frame, ready to be accumulated.
+struct BeamSet {
+    std::vector<Beam> beams;
+    std::vector<std::uint8_t> ends;   // per beam: kEndsOnDiffuse | kEndsOnReceiver where an edge ends there, kAllOnReceiver where all three do,
+                                      // kReceiverOrNothing where each ends there or at the extrusion limit
+    GridStats stats;
+};
+
+class LightGrid {
+public:
+    // Beams are extruded at most to the box of the scene's bounds and the camera (grown by 5 %).
+    LightGrid(const FrameGeometry& frame, const RayTracer& tracer, const GridSettings& settings);
+
+    BeamSet generate() const;
+
+    const LightProjection& projection() const { return proj_; }
+    int resolution() const { return res_; }
+
+    // Follows the light ray through point (i, j) of the finest grid's lattice (exposed for tests).
+    LightPath trace(double i, double j) const;
+
+private:
+    struct Cell { int level, i, j; };
+    double triangle_flux(const glm::dvec2& a, const glm::dvec2& b, const glm::dvec2& c) const;
+    void ray_at(double i, double j, glm::dvec3& origin, glm::dvec3& dir) const;
+
+    const FrameGeometry& frame_;
+    const RayTracer& tracer_;
+    GridSettings s_;
+    LightProjection proj_;
+    int res_ = 0;          // finest lattice cells per side (grid x 2^iterations)
+    Bounds3 extent_;
+    double offset_ = 1e-5;
+};
+
+}  // namespace caustics::adaptive_beams

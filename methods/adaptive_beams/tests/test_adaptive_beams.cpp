@@ -1,0 +1,346 @@
+// adaptive_beams through the plugin interface: the volume caustic radiance under flat water against its
+// closed form, the flat interface's irradiance on the receiver and in the camera, the adaptive grid
+// against the uniform one at equal beam count on `sphere`, the hard cases (a focus on the receiver,
+// grazing light, total internal reflection, beams leaving the frustum), determinism across thread
+// counts, and the refusals.
+#include <cmath>
+#include <map>
+#include <memory>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <caustics/api/registry.hpp>
+#include <caustics/frame/baseline.hpp>
+#include <caustics/frame/camera.hpp>
+#include <caustics/frame/ray_tracer.hpp>
+#include <caustics/scene/water_scene.hpp>
+#include <caustics/util/errors.hpp>
+#include <caustics/reference/reference.hpp>
+#include <caustics/util/timing.hpp>
+#include "conformance_cases.hpp"
+#include "reference_support.hpp"
+#include "method_support.hpp"
+
+using namespace caustics;
+
+namespace {
+
+constexpr const char* kMethod = "adaptive_beams";
+
+// Flat water (n 1.33) over a floor 1 m down, lit straight down with E0 = 1 W/m^2; the water scatters
+// (sigma_s 0.4, sigma_a 0.1 /m, g 0.3); the camera is under the surface looking down and sideways.
+Scene murky_flat_water() {
+    WaterOverFloor d;
+    d.water_size = {3.0, 3.0};
+    d.floor_z = -1.0;
+    d.floor_u = {3.0, 0.0, 0.0};
+    d.floor_v = {0.0, 3.0, 0.0};
+    d.receiver_resolution = 32;
+    Scene scene = make_water_scene(d);
+    scene.objects[0].material.absorption = 0.1;
+    scene.objects[0].material.scattering = 0.4;
+    scene.objects[0].material.anisotropy = 0.3;
+    scene.camera.position = {0.0, -0.2, -0.3};
+    scene.camera.look_at = {0.0, 0.5, -0.9};
+    scene.camera.fov_y_deg = 50.0;
+    scene.camera.width = 48;
+    scene.camera.height = 36;
+    return scene;
+}
+
+struct Rendered {
+    CausticOutput out;
+    CameraGBuffer gbuffer;
+};
+
+Rendered render(const Scene& scene, const std::map<std::string, std::string>& overrides, int bins, int threads = 2,
+                bool volume = true) {
+    tbb::global_control control(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+    const MethodInfo& info = require_method(kMethod);
+    std::unique_ptr<Method> method = info.create(ParamSet::resolve(info.name, info.params, overrides));
+    EXPECT_TRUE(method->capabilities(scene).supported);
+    const FrameGeometry frame = build_frame_geometry(scene, 0);
+    const RayTracer tracer(frame);
+    Rendered r;
+    r.gbuffer = build_camera_gbuffer(tracer, scene.camera);
+    const ReceiverChart chart(frame, bins, bins);
+    method->prepare(scene);
+    method->update(frame);
+    RenderRequest request;
+    request.receiver = &chart;
+    request.camera = &r.gbuffer;
+    request.camera_volume = volume;
+    r.out = method->render(frame, request);
+    return r;
+}
+
+bool all_finite(const Image& image) {
+    for (float v : image.pixels)
+        if (!std::isfinite(v)) return false;
+    return true;
+}
+
+double nrmse(const Image& m, const Image& r) {
+    double se = 0.0, sum = 0.0;
+    for (std::size_t i = 0; i < r.pixels.size(); ++i) {
+        se += (m.pixels[i] - r.pixels[i]) * static_cast<double>(m.pixels[i] - r.pixels[i]);
+        sum += r.pixels[i];
+    }
+    const double n = static_cast<double>(r.pixels.size());
+    return std::sqrt(se / n) / (sum / n);
+}
+
+}  // namespace
+
+TEST(AdaptiveBeams, DeclaresGridAndIterations) {
+    const MethodInfo& info = require_method(kMethod);
+    int declared = 0;
+    for (const ParamSpec& p : info.params)
+        if (p.name == "grid" || p.name == "iterations") {
+            ++declared;
+            EXPECT_FALSE(p.doc.empty()) << p.name;
+            EXPECT_LT(p.min, p.max) << p.name;
+        }
+    EXPECT_EQ(declared, 2);
+    EXPECT_THROW(ParamSet::resolve(info.name, info.params, {{"grid", "0"}}), InputError);
+    EXPECT_THROW(ParamSet::resolve(info.name, info.params, {{"hull", "sphere"}}), InputError);
+}
+
+// Under flat water lit straight down the refracted light is a parallel beam of E = E0 downwards; a camera
+// ray from c (depth z_c) along w collects, from s0 = kVolumeNearDistance to its hit,
+//   L = sigma_s p(w_z) E0 exp(-sigma_t z_c) (exp(-k s0) - exp(-k s_hit)) / k,  k = sigma_t (1 - w_z)
+// (light path z_c + s (-w_z), camera path s). The beams tile the light exactly, so every pixel matches.
+TEST(AdaptiveBeams, VolumeRadianceUnderFlatWaterMatchesClosedForm) {
+    const Scene scene = murky_flat_water();
+    const Rendered r = render(scene, {}, 32);
+    ASSERT_EQ(r.gbuffer.medium_object, 0) << "the camera is in the water";
+    const CameraModel cam(scene.camera);
+    const MediumCoefficients m = medium_at(scene, 0);
+    const double st = m.extinction(), zc = -scene.camera.position.z;
+    int checked = 0;
+    for (int y = 0; y < r.gbuffer.height; ++y)
+        for (int x = 0; x < r.gbuffer.width; ++x) {
+            const std::size_t i = r.gbuffer.index(x, y);
+            if (r.gbuffer.object[i] != 1) continue;   // rays that end on the floor
+            const glm::dvec3 w = cam.ray_direction(x + 0.5, y + 0.5);
+            const double s_hit = glm::length(glm::dvec3(r.gbuffer.position[i]) - cam.position);
+            const double k = st * (1.0 - w.z);
+            const double s0 = kVolumeNearDistance;   // the volume view starts this far off the pinhole
+            const double expected = m.scattering * henyey_greenstein(w.z, m.anisotropy) * std::exp(-st * zc) *
+                                    (std::exp(-k * s0) - std::exp(-k * s_hit)) / k;
+            EXPECT_NEAR(r.out.camera_volume.at(x, y), expected, 2e-3 * expected) << "pixel " << x << ", " << y;
+            // The floor receives E0 exp(-sigma_t 1 m) (extinction along the whole path).
+            EXPECT_NEAR(r.out.camera.at(x, y), std::exp(-st * 1.0), 2e-3) << "pixel " << x << ", " << y;
+            ++checked;
+        }
+    EXPECT_GT(checked, 200);
+    EXPECT_GT(r.out.health.get("fill"), 0);
+    EXPECT_EQ(r.out.health.get("nonfinite"), 0);
+    // The receiver map carries the same irradiance in every bin.
+    for (int y = 1; y < 31; ++y)
+        for (int x = 1; x < 31; ++x) EXPECT_NEAR(r.out.receiver.at(x, y), std::exp(-st), 2e-3) << x << ", " << y;
+}
+
+// Oblique light through flat water with Fresnel: the receiver matches the flat interface's irradiance.
+TEST(AdaptiveBeams, FlatObliqueMatchesTheFlatInterface) {
+    const Scene scene = test_support::shipped_scene("flat_oblique");
+    const Rendered r = render(scene, {}, 64, 2, false);
+    const FrameGeometry frame = build_frame_geometry(scene, 0);
+    const ReceiverChart chart(frame, 64, 64);
+    const Image truth = flat_interface_baseline(frame, chart);
+    int compared = 0;
+    for (int y = 2; y < 62; ++y)
+        for (int x = 2; x < 62; ++x)
+            if (truth.at(x, y) > 0.0f && truth.at(x - 2, y) > 0.0f && truth.at(x + 2, y) > 0.0f &&
+                truth.at(x, y - 2) > 0.0f && truth.at(x, y + 2) > 0.0f) {
+                EXPECT_NEAR(r.out.receiver.at(x, y), truth.at(x, y), 1e-3 * truth.at(x, y)) << x << ", " << y;
+                ++compared;
+            }
+    EXPECT_GT(compared, 1000);
+}
+
+// On `sphere` (a glass ball under a point light) the adaptive grid refines at the silhouette, where the
+// ray map bends and where the beams end focused; at the same number of beams its receiver error against
+// the Monte Carlo reference (4e6 photons, 96 x 96 bins) is lower than the uniform grid's.
+TEST(AdaptiveBeams, AdaptiveBeatsUniformAtEqualBeamCountOnSphere) {
+    Scene scene = test_support::shipped_scene("sphere");
+    scene.camera.width = 32;
+    scene.camera.height = 24;
+    constexpr int kMap = 96;
+    scene.receiver.width = scene.receiver.height = kMap;
+    const test_support::TracedScene traced(scene);
+    const ReferenceResult ref = traced.run(4'000'000, 2);
+    const Rendered adaptive = render(scene, {}, kMap, 2, false);
+    const std::int64_t beams = adaptive.out.health.get("beams_generated");
+    EXPECT_GT(adaptive.out.health.get("beams_split"), 0);
+    // The uniform grid with the nearest beam count.
+    int best = 0;
+    std::int64_t best_gap = 1LL << 60;
+    Rendered uniform;
+    for (int g = 96; g <= 128; g += 2) {
+        Rendered u = render(scene, {{"adaptive", "false"}, {"grid", std::to_string(g)}}, kMap, 2, false);
+        const std::int64_t gap = std::llabs(u.out.health.get("beams_generated") - beams);
+        if (gap < best_gap) best_gap = gap, best = g, uniform = std::move(u);
+    }
+    const double e_adaptive = nrmse(adaptive.out.receiver, ref.receiver);
+    const double e_uniform = nrmse(uniform.out.receiver, ref.receiver);
+    std::printf("sphere: %lld adaptive beams, nrmse %.4f; uniform grid %d (%lld beams), nrmse %.4f; reference noise %.4f\n",
+                static_cast<long long>(beams), e_adaptive, best,
+                static_cast<long long>(uniform.out.health.get("beams_generated")), e_uniform, ref.noise_nrmse);
+    EXPECT_LT(static_cast<double>(best_gap), 0.05 * static_cast<double>(beams));
+    EXPECT_LT(e_adaptive, e_uniform);
+}
+
+// The ball lens's floor lies past the focus: beams flip, |A| is clamped near the focus, all is finite.
+TEST(AdaptiveBeams, BeamsThroughAFocusAreCountedAndFinite) {
+    Scene scene = test_support::shipped_scene("ball_lens");
+    scene.camera.width = 32;
+    scene.camera.height = 24;
+    const Rendered r = render(scene, {}, 64, 2, false);
+    EXPECT_GT(r.out.health.get("flipped"), 0);
+    EXPECT_TRUE(all_finite(r.out.receiver));
+    EXPECT_TRUE(all_finite(r.out.camera));
+    EXPECT_EQ(r.out.health.get("nonfinite"), 0);
+}
+
+// Grazing light (sine_grazing, 80 deg) stays finite; a glass cube lit 60 deg off the vertical reflects
+// the refracted light totally at its sides: those beams are discarded and counted.
+TEST(AdaptiveBeams, GrazingLightAndTotalInternalReflection) {
+    {
+        Scene scene = test_support::shipped_scene("sine_grazing");
+        scene.camera.width = 32;
+        scene.camera.height = 24;
+        const Rendered r = render(scene, {}, 64, 2, false);
+        EXPECT_TRUE(all_finite(r.out.receiver));
+        EXPECT_EQ(r.out.health.get("nonfinite"), 0);
+    }
+    Scene scene = test_support::shipped_scene("sphere");
+    scene.objects[0].shape = ShapeType::Box;
+    scene.objects[0].size = {0.6, 0.6, 0.6};
+    scene.lights[0].type = LightType::Directional;
+    scene.lights[0].direction = glm::normalize(glm::dvec3(std::sin(1.05), 0.0, -std::cos(1.05)));
+    scene.lights[0].irradiance = 1.0;
+    scene.camera.width = 32;
+    scene.camera.height = 24;
+    const Rendered r = render(scene, {}, 64, 2, false);
+    EXPECT_GT(r.out.health.get("discarded_tir"), 0);
+    EXPECT_TRUE(all_finite(r.out.receiver));
+}
+
+// Beams that leave the camera's frustum: under murky flat water the camera sits among the beams (hulls
+// cut by its near plane) and most beams lie outside the image; all counted, the output finite.
+TEST(AdaptiveBeams, BeamsThatLeaveTheFrustumAreCounted) {
+    const Rendered r = render(murky_flat_water(), {}, 32);
+    EXPECT_GT(r.out.health.get("near_clipped"), 0);
+    EXPECT_GT(r.out.health.get("offscreen"), 0);
+    EXPECT_TRUE(all_finite(r.out.camera_volume));
+}
+
+// The same output for 1 and 2 threads (receiver, camera and volume).
+TEST(AdaptiveBeams, DeterministicAcrossThreadCounts) {
+    Scene scene = test_support::shipped_scene("sphere");
+    scene.medium.present = true;
+    scene.medium.scattering = 0.2;
+    scene.medium.absorption = 0.05;
+    scene.camera.width = 48;
+    scene.camera.height = 36;
+    const Rendered a = render(scene, {}, 48, 1), b = render(scene, {}, 48, 2);
+    EXPECT_EQ(a.out.receiver.pixels, b.out.receiver.pixels);
+    EXPECT_EQ(a.out.camera.pixels, b.out.camera.pixels);
+    EXPECT_EQ(a.out.camera_volume.pixels, b.out.camera_volume.pixels);
+    double sum = 0.0;
+    for (float v : a.out.camera_volume.pixels) sum += v;
+    EXPECT_GT(sum, 0.0);
+}
+
+// capabilities() refuses, with a reason, the scenes the method cannot draw.
+TEST(AdaptiveBeams, RefusesWhatItCannotDraw) {
+    const MethodInfo& info = require_method(kMethod);
+    const std::unique_ptr<Method> method = info.create(ParamSet::resolve(info.name, info.params, {}));
+    const Scene sphere = test_support::shipped_scene("sphere");
+    EXPECT_TRUE(method->capabilities(sphere).supported);
+    EXPECT_TRUE(method->volume_capability(sphere).supported);
+    Scene two_lights = sphere;
+    two_lights.lights.push_back(sphere.lights[0]);
+    Scene dispersive = sphere;
+    dispersive.objects[0].material.dispersion = 0.02;
+    Scene fresnel = sphere;
+    fresnel.fresnel = true;
+    for (const Scene* scene : {&two_lights, &dispersive, &fresnel}) {
+        const Capability c = method->capabilities(*scene);
+        EXPECT_FALSE(c.supported);
+        EXPECT_FALSE(c.reason.empty());
+    }
+}
+
+
+// The two volume-caustic scenes at a small camera: every view finite and lit, the volume caustic in the
+// camera's medium (the fog; the murky water the camera is in), the health counters filled.
+TEST(AdaptiveBeams, RendersSphereFogAndPoolMurky) {
+    for (const char* name : {"sphere_fog", "pool_murky"}) {
+        SCOPED_TRACE(name);
+        Scene scene = test_support::shipped_scene(name);
+        scene.camera.width = 64;
+        scene.camera.height = 48;
+        const Rendered r = render(scene, {}, 64);
+        EXPECT_EQ(r.gbuffer.medium_object, std::string(name) == "pool_murky" ? 0 : -1);
+        for (const Image* img : {&r.out.receiver, &r.out.camera, &r.out.camera_volume}) {
+            EXPECT_TRUE(all_finite(*img));
+            double sum = 0.0;
+            for (float v : img->pixels) sum += v;
+            EXPECT_GT(sum, 0.0);
+        }
+        EXPECT_GT(r.out.health.get("beams_generated"), 0);
+        EXPECT_GT(r.out.health.get("fill"), 0);
+        EXPECT_EQ(r.out.health.get("nonfinite"), 0);
+        std::printf("%s: beams %lld split %lld flipped %lld fill %lld clamped %lld near_clipped %lld\n", name,
+                    static_cast<long long>(r.out.health.get("beams_generated")),
+                    static_cast<long long>(r.out.health.get("beams_split")),
+                    static_cast<long long>(r.out.health.get("flipped")),
+                    static_cast<long long>(r.out.health.get("fill")),
+                    static_cast<long long>(r.out.health.get("clamped")),
+                    static_cast<long long>(r.out.health.get("near_clipped")));
+    }
+}
+
+// Against the reference's camera_volume (single scattering towards the pinhole) on the two volume scenes
+// at 64 x 48 pixels (2e6 photons): the net error (mean squared difference less the reference's own variance) is below
+// the best constant's (the mean of the reference: the no-caustic baseline of the volume view).
+TEST(AdaptiveBeams, CameraVolumeAgainstTheReference) {
+    for (const char* name : {"sphere_fog", "pool_murky"}) {
+        SCOPED_TRACE(name);
+        Scene scene = test_support::shipped_scene(name);
+        scene.camera.width = 64;
+        scene.camera.height = 48;
+        scene.receiver.width = scene.receiver.height = 64;
+        const test_support::TracedScene traced(scene);
+        const CameraGBuffer gbuffer = build_camera_gbuffer(*traced.tracer, scene.camera);
+        const ReferenceResult ref = traced.run(2'000'000, 2, &gbuffer);
+        ASSERT_EQ(ref.camera_volume.pixels.size(), gbuffer.covered.size());
+        const Rendered r = render(scene, {}, 64);
+        const std::size_t n = ref.camera_volume.pixels.size();
+        double mean = 0.0, var = 0.0;
+        for (std::size_t i = 0; i < n; ++i) {
+            mean += ref.camera_volume.pixels[i];
+            var += static_cast<double>(ref.camera_volume_stderr.pixels[i]) * ref.camera_volume_stderr.pixels[i];
+        }
+        mean /= static_cast<double>(n);
+        var /= static_cast<double>(n);
+        double se_method = 0.0, se_constant = 0.0;
+        for (std::size_t i = 0; i < n; ++i) {
+            const double d = r.out.camera_volume.pixels[i] - ref.camera_volume.pixels[i];
+            const double c = mean - ref.camera_volume.pixels[i];
+            se_method += d * d;
+            se_constant += c * c;
+        }
+        se_method /= static_cast<double>(n);
+        se_constant /= static_cast<double>(n);
+        const double net_method = std::sqrt(std::max(0.0, se_method - var)) / mean;
+        const double net_constant = std::sqrt(std::max(0.0, se_constant - var)) / mean;
+        std::printf("%s camera_volume: net nrmse %.4f, constant %.4f, reference noise %.4f\n", name, net_method,
+                    net_constant, ref.noise_nrmse_volume);
+        EXPECT_LT(net_method, net_constant);
+    }
+}
