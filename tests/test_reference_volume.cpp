@@ -158,6 +158,18 @@ TEST(ReferenceVolumeClosedForm, SlabUnderFlatWaterWithAbsorption) { check_slab(0
 
 TEST(ReferenceVolumeClosedForm, SlabUnderFlatWaterAnisotropic) { check_slab(0.2, 0.6, 0.6, "slab sigma_a 0.2, g 0.6"); }
 
+// A point light over a mirror in fog, the camera in the fog beside the reflected pyramid.
+const char* const kMirrorFogScene = R"({
+  "lights": [ {"type": "point", "position": [0, 0, 1], "intensity": 5.0} ],
+  "camera": {"position": [1.8, 0.3, 0.9], "look_at": [0, 0, 0.9], "up": [0, 0, 1], "fov_y": 50, "width": 16, "height": 12},
+  "objects": [
+    {"name": "mirror", "shape": "plane", "center": [0, 0, 0], "u": [1, 0, 0], "v": [0, 1, 0], "material": {"type": "mirror"}},
+    {"name": "ceiling", "shape": "plane", "center": [0, 0, 2.5], "u": [2, 0, 0], "v": [0, -2, 0], "material": {"type": "diffuse"}}
+  ],
+  "medium": {"absorption": 0.05, "scattering": 0.3, "anisotropy": 0.4},
+  "receiver": {"object": "ceiling", "resolution": [8, 8]}
+})";
+
 // Fog outside every object: a point light over a mirror, the camera in the fog beside the reflected
 // pyramid (the first segment, light to mirror, has no specular event and adds nothing to L_v). The
 // ceiling (the receiver) is smaller than the pyramid, so part of the reflected light leaves the scene:
@@ -166,16 +178,7 @@ TEST(ReferenceVolumeClosedForm, MirrorInFog) {
     const ScopedTempDir temp("caustics_volume_fog");
     fs::create_directories(temp.path());
     const fs::path file = temp.path() / "mirror_fog.json";
-    std::ofstream(file) << R"({
-      "lights": [ {"type": "point", "position": [0, 0, 1], "intensity": 5.0} ],
-      "camera": {"position": [1.8, 0.3, 0.9], "look_at": [0, 0, 0.9], "up": [0, 0, 1], "fov_y": 50, "width": 16, "height": 12},
-      "objects": [
-        {"name": "mirror", "shape": "plane", "center": [0, 0, 0], "u": [1, 0, 0], "v": [0, 1, 0], "material": {"type": "mirror"}},
-        {"name": "ceiling", "shape": "plane", "center": [0, 0, 2.5], "u": [2, 0, 0], "v": [0, -2, 0], "material": {"type": "diffuse"}}
-      ],
-      "medium": {"absorption": 0.05, "scattering": 0.3, "anisotropy": 0.4},
-      "receiver": {"object": "ceiling", "resolution": [8, 8]}
-    })";
+    std::ofstream(file) << kMirrorFogScene;
     TracedScene setup(load_scene(file.string()));
     const CameraGBuffer gbuffer = build_camera_gbuffer(*setup.tracer, setup.scene.camera);
     EXPECT_EQ(gbuffer.medium_object, -1);
@@ -297,16 +300,7 @@ TEST(ReferenceVolumeCache, StoredAndRebuilt) {
     const ScopedTempDir temp("caustics_volume_cache");
     fs::create_directories(temp.path());
     const fs::path file = temp.path() / "fog.json";
-    std::ofstream(file) << R"({
-      "lights": [ {"type": "point", "position": [0, 0, 1], "intensity": 5.0} ],
-      "camera": {"position": [1.8, 0.3, 0.9], "look_at": [0, 0, 0.9], "up": [0, 0, 1], "fov_y": 50, "width": 16, "height": 12},
-      "objects": [
-        {"name": "mirror", "shape": "plane", "center": [0, 0, 0], "u": [1, 0, 0], "v": [0, 1, 0], "material": {"type": "mirror"}},
-        {"name": "ceiling", "shape": "plane", "center": [0, 0, 2.5], "u": [2, 0, 0], "v": [0, -2, 0], "material": {"type": "diffuse"}}
-      ],
-      "medium": {"absorption": 0.05, "scattering": 0.3, "anisotropy": 0.4},
-      "receiver": {"object": "ceiling", "resolution": [8, 8]}
-    })";
+    std::ofstream(file) << kMirrorFogScene;
     TracedScene setup(load_scene(file.string()));
     const CameraGBuffer gbuffer = build_camera_gbuffer(*setup.tracer, setup.scene.camera);
     ReferenceSettings settings;

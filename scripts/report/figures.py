@@ -11,7 +11,7 @@ from matplotlib.container import ErrorbarContainer  # noqa: E402
 from matplotlib.colors import LogNorm, Normalize  # noqa: E402
 from matplotlib.ticker import LogFormatter  # noqa: E402
 
-from load import ok_runs, read_image, scene_baseline  # noqa: E402
+from load import ok_runs, read_image, run_images, scene_baseline  # noqa: E402
 from pareto import pareto_front  # noqa: E402
 
 MARKERS = "osD^v<>ph*"
@@ -272,8 +272,7 @@ def image_grid(frame, scene, directory, sweep_dir, chosen):
         truth_title = "reference"
     if reference is None:
         return None
-    maps = [(p, read_image(os.path.join(sweep_dir, "runs", p["run_id"], "receiver.exr"))) for p in picks]
-    maps = [(p, m) for p, m in maps if m is not None and m.shape == reference.shape]
+    maps = run_images(sweep_dir, picks, "receiver.exr", reference.shape)
     if not maps:
         return None
     norm, irradiance_label = irradiance_norm(reference)

@@ -89,6 +89,12 @@ def read_image(path):
     return pixels[:, :, 0] if pixels.ndim == 3 else pixels
 
 
+def run_images(sweep_dir, picks, name, shape):
+    """(run, image) for each picked run whose DIR/runs/<run_id>/<name> exists with the truth's shape."""
+    maps = [(p, read_image(os.path.join(sweep_dir, "runs", p["run_id"], name))) for p in picks]
+    return [(p, m) for p, m in maps if m is not None and m.shape == shape]
+
+
 def ok_runs(frame):
     """Runs with a finite error and frame time: what plots and tables use."""
     ok = frame[(frame["status"] == "ok") & np.isfinite(frame["error"]) & np.isfinite(frame["frame_ms"])]

@@ -10,7 +10,7 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
 from figures import _save  # noqa: E402
-from load import read_image  # noqa: E402
+from load import read_image, run_images  # noqa: E402
 
 
 def _numeric(frame, column):
@@ -61,8 +61,7 @@ def volume_images(runs, scene, directory, sweep_dir):
     reference = read_image(os.path.join(sweep_dir, "references", f"{scene}-f{frame_no}", "reference_camera_volume.exr"))
     if reference is None:
         return None
-    maps = [(p, read_image(os.path.join(sweep_dir, "runs", p["run_id"], "camera_volume.exr"))) for p in picks]
-    maps = [(p, m) for p, m in maps if m is not None and m.shape == reference.shape]
+    maps = run_images(sweep_dir, picks, "camera_volume.exr", reference.shape)
     if not maps:
         return None
     top = float(np.percentile(reference, 99.5)) or 1.0
