@@ -11,7 +11,7 @@ from matplotlib.container import ErrorbarContainer  # noqa: E402
 from matplotlib.colors import LogNorm, Normalize  # noqa: E402
 from matplotlib.ticker import LogFormatter  # noqa: E402
 
-from load import ok_runs, read_image, run_images, scene_baseline  # noqa: E402
+from load import numeric, ok_runs, read_image, run_images, scene_baseline  # noqa: E402
 from pareto import pareto_front  # noqa: E402
 
 MARKERS = "osD^v<>ph*"
@@ -61,6 +61,16 @@ def _save(fig, directory, name):
     return paths
 
 
+def bare_axes(axes):
+    """Image panes: no ticks; panes left without an image are hidden."""
+    for row in axes:
+        for a in row:
+            a.set_xticks([])
+            a.set_yticks([])
+            if not a.images:
+                a.axis("off")
+
+
 def _style(method_labels):
     cmap = plt.get_cmap("tab10")
     return {label: (cmap(i % 10), MARKERS[i % len(MARKERS)]) for i, label in enumerate(sorted(method_labels))}
@@ -81,7 +91,7 @@ def log_floor(values):
 
 
 def has_frame_time(frame):
-    return "frame_ms_median" in frame and pd.to_numeric(frame["frame_ms_median"], errors="coerce").notna().any()
+    return bool(numeric(frame, "frame_ms_median").notna().any())
 
 
 def draw_time_vs_error(ax, frame, scene):
@@ -302,12 +312,7 @@ def image_grid(frame, scene, directory, sweep_dir, chosen):
     if truth_title == "reference" and stderr is not None and stderr.shape == reference.shape:
         axes[1][0].imshow(stderr, cmap="RdBu_r", vmin=-limit, vmax=limit, origin="lower")
         axes[1][0].set_title("reference std. error", fontsize=8)
-    for row in axes:
-        for a in row:
-            a.set_xticks([])
-            a.set_yticks([])
-            if not a.images:
-                a.axis("off")
+    bare_axes(axes)
     fig.colorbar(im, ax=list(axes[0]), shrink=0.8, label=irradiance_label)
     fig.colorbar(dm, ax=list(axes[1]), shrink=0.8, label="signed difference [W/m^2]")
     fig.suptitle(f"{scene}, frame {frame_no}: receiver maps", fontsize=10)

@@ -16,7 +16,8 @@ def _truthy(series):
     return series.astype(str).str.strip().str.lower().isin(["true", "1"])
 
 
-def _numeric(frame, column):
+def numeric(frame, column):
+    """The column as numbers (NaN where empty or not a number; all NaN where the column is absent)."""
     if column not in frame:
         return pd.Series(np.nan, index=frame.index)
     return pd.to_numeric(frame[column], errors="coerce")
@@ -37,16 +38,16 @@ def add_derived_columns(frame):
     for flag in FLAGS:
         frame[flag] = _truthy(frame[flag]) if flag in frame else False
     # DESIGN.md section 6: nrmse for radiometric methods, the scale-fitted nrmse otherwise (labelled "fit").
-    frame["error_raw"] = np.where(frame["radiometric"], _numeric(frame, "nrmse"), _numeric(frame, "nrmse_fit"))
-    net = _numeric(frame, "error_net")
+    frame["error_raw"] = np.where(frame["radiometric"], numeric(frame, "nrmse"), numeric(frame, "nrmse_fit"))
+    net = numeric(frame, "error_net")
     frame["error_is_net"] = np.isfinite(net)
     frame["error"] = np.where(frame["error_is_net"], net, frame["error_raw"])
-    frame["error_lo"] = np.where(frame["error_is_net"], _numeric(frame, "error_net_lo"), np.nan)
-    frame["error_hi"] = np.where(frame["error_is_net"], _numeric(frame, "error_net_hi"), np.nan)
+    frame["error_lo"] = np.where(frame["error_is_net"], numeric(frame, "error_net_lo"), np.nan)
+    frame["error_hi"] = np.where(frame["error_is_net"], numeric(frame, "error_net_hi"), np.nan)
     for column in ("baseline_error", "noise_nrmse", "noise_target"):
-        frame[column] = _numeric(frame, column)
-    per_frame = _numeric(frame, "frame_ms_median")
-    render = _numeric(frame, "time_ms_median")
+        frame[column] = numeric(frame, column)
+    per_frame = numeric(frame, "frame_ms_median")
+    render = numeric(frame, "time_ms_median")
     frame["frame_ms"] = np.where(np.isfinite(per_frame), per_frame, render)
     with np.errstate(divide="ignore"):
         frame["frame_fps"] = 1000.0 / frame["frame_ms"]

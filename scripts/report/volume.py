@@ -7,16 +7,9 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-import pandas as pd  # noqa: E402
 
-from figures import _save  # noqa: E402
-from load import read_image, run_images  # noqa: E402
-
-
-def _numeric(frame, column):
-    if column not in frame:
-        return pd.Series(np.nan, index=frame.index)
-    return pd.to_numeric(frame[column], errors="coerce")
+from figures import _save, bare_axes  # noqa: E402
+from load import numeric, read_image, run_images  # noqa: E402
 
 
 def volume_runs(frame, scene):
@@ -24,11 +17,11 @@ def volume_runs(frame, scene):
     runs = frame[(frame["scene"] == scene) & (frame["status"] == "ok")].copy()
     if runs.empty:
         return runs
-    net = _numeric(runs, "volume_nrmse_net")
-    raw = _numeric(runs, "volume_nrmse")
+    net = numeric(runs, "volume_nrmse_net")
+    raw = numeric(runs, "volume_nrmse")
     runs["volume_error_is_net"] = np.isfinite(net)
     runs["volume_error"] = np.where(runs["volume_error_is_net"], net, raw)
-    runs["volume_baseline"] = _numeric(runs, "volume_baseline_error")
+    runs["volume_baseline"] = numeric(runs, "volume_baseline_error")
     return runs[np.isfinite(runs["volume_error"]) & np.isfinite(runs["frame_ms"])]
 
 
@@ -76,12 +69,7 @@ def volume_images(runs, scene, directory, sweep_dir):
         dm = axes[1][i].imshow(m - reference, cmap="RdBu_r", vmin=-limit, vmax=limit)
         kind = "net error" if p["volume_error_is_net"] else "nrmse"
         axes[1][i].set_title(f"method - reference\n{kind} {p['volume_error']:.3f}", fontsize=8)
-    for row in axes:
-        for a in row:
-            a.set_xticks([])
-            a.set_yticks([])
-            if not a.images:
-                a.axis("off")
+    bare_axes(axes)
     fig.colorbar(im, ax=list(axes[0]), shrink=0.8, label="L_v [W/(m^2 sr)]")
     fig.colorbar(dm, ax=list(axes[1]), shrink=0.8, label="signed difference [W/(m^2 sr)]")
     fig.suptitle(f"{scene}, frame {frame_no}: volume caustic radiance (camera view)", fontsize=10)
