@@ -54,7 +54,7 @@ int slurm_command(const SweepOptions& o, int tasks, const std::string& extra, bo
     const SweepSpec spec = load_sweep_spec(o.spec_path, o.axis_overrides);
     const std::vector<PlannedRun> runs = plan_runs(spec);
     std::set<std::string> pairs;
-    for (const PlannedRun& r : runs) pairs.insert(r.scene_name + "-f" + std::to_string(r.frame));
+    for (const PlannedRun& r : runs) pairs.insert(reference_key(r));
     SlurmPlan plan;
     plan.program = fs::absolute(fs::read_symlink("/proc/self/exe")).string();
     plan.spec_path = fs::absolute(o.spec_path).string();

@@ -275,8 +275,6 @@ std::string shard_text(const json& shard) {
     return "shard " + shard.value("index", json()).dump() + "/" + shard.value("count", json()).dump();
 }
 
-std::string reference_key(const PlannedRun& run) { return run.scene_name + "-f" + std::to_string(run.frame); }
-
 // The reference of the run's scene and frame, through the cache, and its files in `ref_dir`. False when
 // the scene frame has no reference (bad input of that scene frame: the runs record the message).
 bool prepare_reference(const SweepSpec& spec, const PlannedRun& run, const SweepOptions& options,

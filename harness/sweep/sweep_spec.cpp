@@ -529,4 +529,6 @@ std::vector<PlannedRun> plan_runs(const SweepSpec& spec) {
     return runs;
 }
 
+std::string reference_key(const PlannedRun& run) { return run.scene_name + "-f" + std::to_string(run.frame); }
+
 }  // namespace caustics

@@ -97,6 +97,10 @@ struct PlannedRun {
     std::map<std::string, std::string> params;   // the axis values of this run
 };
 
+// The run's (scene, frame) reference as a folder name, "<scene>-f<frame>": the runs that share it share
+// one reference (DIR/references/<key>/).
+std::string reference_key(const PlannedRun& run);
+
 // Reads a spec and applies `axis_overrides` ("method.axis=<json value>", from --axis). Throws InputError
 // naming the file and key for every malformed input, every duplicate, and a sweep of more than
 // kMaxSweepRuns runs (counted before any axis is expanded).
