@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <memory>
 #include <string>
@@ -12,6 +13,7 @@
 
 #include <glm/glm.hpp>
 
+#include "../elliptic_splats.hpp"
 #include "../splats.hpp"
 #include <caustics/frame/frame.hpp>
 #include <caustics/frame/receiver_chart.hpp>
@@ -137,4 +139,61 @@ TEST(CausticMappingSplats, SphereSilhouetteSplatsHaveNeighbours) {
     const CausticOutput out = method->render(frame, request);
     EXPECT_GT(out.health.get("splats"), 0);
     EXPECT_EQ(out.health.get("isolated_splats"), 0);
+}
+
+// draw_elliptic against a direct double-precision evaluation of its definition: each texel whose centre
+// lies inside the 3.5-sigma ellipse gets value exp(-q) / sum of exp(-q) over those texels, q = d^T
+// Sigma^-1 d / 2. Narrow (the normalising sum over texels), wide (the closed-form normalisation) and
+// clipped splats. The single-precision exponential has a relative error of about 1.2e-7 and q is rounded
+// in float (|q| <= 6.6, so about 4e-7 in q and thus in exp(-q)); with the float image that bounds each
+// texel's relative error by 1e-6, which is the tolerance.
+TEST(CausticMappingSplats, EllipticWeightsMatchTheirDefinition) {
+    const int W = 64, H = 48;
+    const std::vector<EllipticSplat> cases = {
+        {{20.3f, 17.8f}, 2.0f, {0.3f, 0.1f, 0.8f}},      // narrow: normalised over the texels
+        {{31.6f, 24.2f}, 1.5f, {9.0f, 4.0f, 6.0f}},      // wide, sheared: closed-form normalisation
+        {{2.4f, 45.1f}, 3.0f, {16.0f, -3.0f, 4.0f}},     // clipped by the image's corner
+    };
+    for (const EllipticSplat& s : cases) {
+        Image img(W, H);
+        const SplatStats st = draw_elliptic({s}, img);
+        const double a = s.cov.x, b = s.cov.y, d = s.cov.z, det = a * d - b * b;
+        const double ixx = d / det, ixy = -b / det, iyy = a / det;
+        const double cut = 0.5 * kEllipticCutoff * kEllipticCutoff;
+        auto q_at = [&](int i, int j) {
+            const double dx = i + 0.5 - s.pixel.x, dy = j + 0.5 - s.pixel.y;
+            return 0.5 * (ixx * dx * dx + 2.0 * ixy * dx * dy + iyy * dy * dy);
+        };
+        double sum = 0.0, in = 0.0;
+        for (int j = -100; j < 150; ++j)
+            for (int i = -100; i < 150; ++i)
+                if (q_at(i, j) <= cut) {
+                    sum += std::exp(-q_at(i, j));
+                    if (i >= 0 && j >= 0 && i < W && j < H) in += std::exp(-q_at(i, j));
+                }
+        // Both eigenvalues >= 1 and the support inside the image: the closed-form normalisation.
+        const double minor = 0.5 * (a + d) - std::sqrt(0.25 * (a - d) * (a - d) + b * b);
+        const bool wide = minor >= 1.0 && in == sum;
+        // The closed form stands for the sum to within 1e-4 (elliptic_splats.cpp): the wide case's
+        // texels are compared after dividing out the normalisation.
+        const double norm_tol = wide ? 1e-4 : 1e-6;
+        double drawn = 0.0;
+        for (int j = 0; j < H; ++j)
+            for (int i = 0; i < W; ++i) {
+                const double want = q_at(i, j) <= cut ? s.value * std::exp(-q_at(i, j)) / sum : 0.0;
+                const double got = img.at(i, j);
+                drawn += got;
+                if (want == 0.0) {
+                    // A centre within rounding of the ellipse may fall on either side: its weight is exp(-6.1).
+                    if (got != 0.0) {
+                        EXPECT_NEAR(q_at(i, j), cut, 1e-5) << i << "," << j;
+                    }
+                    continue;
+                }
+                EXPECT_NEAR(got / want, 1.0, norm_tol + 1e-6) << "texel " << i << "," << j;
+            }
+        EXPECT_NEAR(drawn, s.value * in / sum, s.value * (norm_tol + 1e-6));
+        EXPECT_EQ(st.splatted, 1);
+        EXPECT_NEAR(st.value_inside, s.value * in / sum, s.value * (norm_tol + 1e-6));
+    }
 }
