@@ -1,4 +1,5 @@
 #include "elliptic_splats.hpp"
+#include "simd.hpp"
 
 #include <algorithm>
 #include <array>
@@ -115,18 +116,10 @@ inline float row_sum(const RowSpan& s, int i0, int i1) {
     return sum;
 }
 
-// The splat loops are compiled for AVX2 as well where the compiler can dispatch at load time (GCC's
-// function multiversioning), without fused multiply-adds (ISO C++ mode contracts nothing): the drawn
-// weights are the same on every machine; a row's sum is added in a lane order fixed per instruction set,
-// so it is the same on every run and thread count of one machine.
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
-#define CAUSTICS_SPLAT_KERNEL __attribute__((target_clones("avx2", "default")))
-#else
-#define CAUSTICS_SPLAT_KERNEL
-#endif
+// The splat loops have an AVX2 version (simd.hpp): the drawn weights are the same on every machine.
 
 // The sum of the splat's weights over its whole support, and over the part inside a W x H image.
-CAUSTICS_SPLAT_KERNEL void footprint_sums(const Print& p, glm::dvec2 c, int W, int H, double& sum, double& in) {
+CAUSTICS_AVX2_CLONES void footprint_sums(const Print& p, glm::dvec2 c, int W, int H, double& sum, double& in) {
     sum = in = 0.0;
     for (int j = p.y0; j <= p.y1; ++j) {
         const RowSpan r = row_span(p, c, j);
@@ -141,7 +134,7 @@ CAUSTICS_SPLAT_KERNEL void footprint_sums(const Print& p, glm::dvec2 c, int W, i
 }
 
 // Adds scale x weight to the texels of rows [j0, j1] (their columns already clipped to the image).
-CAUSTICS_SPLAT_KERNEL void draw_rows(const Print& p, glm::dvec2 c, int j0, int j1, float scale, Image& target) {
+CAUSTICS_AVX2_CLONES void draw_rows(const Print& p, glm::dvec2 c, int j0, int j1, float scale, Image& target) {
     for (int j = j0; j <= j1; ++j) {
         const RowSpan r = row_span(p, c, j);
         if (r.i0 > r.i1) continue;
