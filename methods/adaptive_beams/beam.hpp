@@ -75,8 +75,19 @@ double surface_irradiance(const Beam& b, double sigma_t, const glm::dvec3& x, co
 // beam (roots of the three edge functions and of A, quadratic in s), each integrated by Gauss-Legendre
 // with `samples` points (1: the paper's midpoint), with extinction along the light's path in the beam and
 // towards the camera, and the Henyey-Greenstein phase function.
+// Evaluated through RayBeam (ray_beam.hpp), which hoists what one origin shares.
 double volume_radiance(const Beam& b, const MediumCoefficients& medium, const glm::dvec3& o, const glm::dvec3& w,
                        double s_max, int samples, BeamCounters& counters, double s_min = 0.0);
+
+// The same integral point by point: each node's cross-section, barycentric coordinates and local ray
+// built afresh. RayBeam's regrouped sums are checked against it (equal to rounding).
+double volume_radiance_pointwise(const Beam& b, const MediumCoefficients& medium, const glm::dvec3& o,
+                                 const glm::dvec3& w, double s_max, int samples, BeamCounters& counters,
+                                 double s_min = 0.0);
+
+// Real roots of a + b s + c s^2 appended to `out` (a linear or constant polynomial where c vanishes
+// against the other coefficients).
+void real_roots(double a, double b, double c, double* out, int& n);
 
 enum class HullType { Tight, Prism };
 
