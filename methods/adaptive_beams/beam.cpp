@@ -10,24 +10,6 @@ namespace {
 
 double cross2(const glm::dvec2& a, const glm::dvec2& b) { return a.x * b.y - a.y * b.x; }
 
-}  // namespace
-
-void real_roots(double a, double b, double c, double* out, int& n) {
-    const double scale = std::max({std::abs(a), std::abs(b), std::abs(c)});
-    if (scale == 0.0) return;
-    if (std::abs(c) <= 1e-12 * scale) {
-        if (std::abs(b) > 1e-14 * scale) out[n++] = -a / b;
-        return;
-    }
-    const double disc = b * b - 4.0 * a * c;
-    if (disc < 0.0) return;
-    const double q = -0.5 * (b + std::copysign(std::sqrt(disc), b));
-    out[n++] = q / c;
-    if (q != 0.0) out[n++] = a / q;
-}
-
-namespace {
-
 // Barycentric coordinates of in-plane point q in the cross-section at y; false when A is exactly zero.
 bool barycentric(const Beam& b, const glm::dvec2& q, double y, std::array<double, 3>& bary, double& area) {
     const glm::dvec2 P0 = b.p[0] + y * b.g[0], P1 = b.p[1] + y * b.g[1], P2 = b.p[2] + y * b.g[2];

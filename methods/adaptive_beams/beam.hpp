@@ -11,7 +11,9 @@
 // The base plane goes through the centroid of the three start points (the specular surface) with n the
 // mean edge direction, so that beams leaving a curved surface or a second interface are all expressed
 // alike; each edge keeps its own start ys_i and end ye_i (first surface hit, or extrusion limit).
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 
 #include <glm/glm.hpp>
@@ -87,7 +89,19 @@ double volume_radiance_pointwise(const Beam& b, const MediumCoefficients& medium
 
 // Real roots of a + b s + c s^2 appended to `out` (a linear or constant polynomial where c vanishes
 // against the other coefficients).
-void real_roots(double a, double b, double c, double* out, int& n);
+inline void real_roots(double a, double b, double c, double* out, int& n) {
+    const double scale = std::max({std::abs(a), std::abs(b), std::abs(c)});
+    if (scale == 0.0) return;
+    if (std::abs(c) <= 1e-12 * scale) {
+        if (std::abs(b) > 1e-14 * scale) out[n++] = -a / b;
+        return;
+    }
+    const double disc = b * b - 4.0 * a * c;
+    if (disc < 0.0) return;
+    const double q = -0.5 * (b + std::copysign(std::sqrt(disc), b));
+    out[n++] = q / c;
+    if (q != 0.0) out[n++] = a / q;
+}
 
 enum class HullType { Tight, Prism };
 

@@ -28,9 +28,10 @@ constexpr int kPairs[3][2] = {{1, 2}, {2, 0}, {0, 1}};   // side k joins corners
 
 RayBeam::RayBeam(const Beam& b, const glm::dvec3& o, const MediumCoefficients& medium)
     : n_(b.n), e1_(b.e1), e2_(b.e2), y0_(b.y0), y1_(b.y1), dp_{b.dp[0], b.dp[1], b.dp[2]},
-      ys_{b.ys[0], b.ys[1], b.ys[2]}, ye_{b.ye[0], b.ye[1], b.ye[2]}, w_{b.w[0], b.w[1], b.w[2]}, flux_(b.flux),
-      a_min_(b.a_min), flipped_(b.flipped), sigma_t_(medium.extinction()), sigma_s_(medium.scattering),
-      g_(medium.anisotropy) {
+      ys_{b.ys[0], b.ys[1], b.ys[2]}, ye_{b.ye[0], b.ye[1], b.ye[2]}, w_{b.w[0], b.w[1], b.w[2]},
+      a_min_(b.a_min), flipped_(b.flipped), sigma_t_(medium.extinction()),
+      k_(medium.scattering * b.flux * (1.0 - medium.anisotropy * medium.anisotropy) / (4.0 * 3.14159265358979323846)),
+      hg_a_(1.0 + medium.anisotropy * medium.anisotropy), hg_b_(2.0 * medium.anisotropy) {
     const glm::dvec3 r0 = o - b.c;
     yo_ = glm::dot(r0, b.n);
     const glm::dvec2 q0{glm::dot(r0, b.e1), glm::dot(r0, b.e2)};
@@ -130,11 +131,11 @@ double RayBeam::radiance(const glm::dvec3& w, double s_max, int samples, BeamCou
                 ++counters.clamped;
             }
             const double path = std::max(0.0, y - ys) * stretch;
-            const double e = flux_ * weight * stretch / a;
-            if (e == 0.0) continue;
-            const double phase = henyey_greenstein(-glm::dot(dl, w) / stretch, g_);
+            // sigma_s p_HG(cos) E_perp with E_perp = flux weight stretch / |A| (beam.cpp, local_density) and
+            // p_HG = (1 - g^2) / (4 pi d^1.5), d = 1 + g^2 - 2 g cos: one division for the three.
+            const double d = hg_a_ - hg_b_ * (-glm::dot(dl, w) / stretch);
             // Extinction along the light's path in the beam and then towards the camera, one exponential.
-            total += gq.w[i] * half * sigma_s_ * phase * e * std::exp(-sigma_t_ * (path + s));
+            total += gq.w[i] * half * k_ * weight * stretch * std::exp(-sigma_t_ * (path + s)) / (a * d * std::sqrt(d));
         }
     }
     return total;

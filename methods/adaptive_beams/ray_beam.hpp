@@ -39,9 +39,10 @@ private:
     double radius_ = 0.0;
     glm::dvec3 dp_[3]{};
     double ys_[3]{}, ye_[3]{}, w_[3]{};
-    double flux_ = 0.0, a_min_ = 0.0;
+    double a_min_ = 0.0;
     bool flipped_ = false;
-    double sigma_t_ = 0.0, sigma_s_ = 0.0, g_ = 0.0;
+    double sigma_t_ = 0.0;
+    double k_ = 0.0, hg_a_ = 1.0, hg_b_ = 0.0;   // sigma_s flux (1 - g^2) / (4 pi); 1 + g^2; 2 g
 };
 
 }  // namespace caustics::adaptive_beams
