@@ -3,7 +3,8 @@
 // scenes' 1024 x 768 camera (pool_murky's 640 x 480 scaled to it), all three views, with the stages
 // (beam generation, camera beams = volume accumulation with the camera's surface caustics, receiver
 // surface caustics) as counters. Families: the scene (0 sphere_fog, 1 pool_murky), adaptive (16, 3 levels)
-// against the uniform 64 x 64 grid (beams and fill), and the tight hull against the prism (fill and time).
+// against the uniform 64 x 64 grid (beams and fill), and the tight hull against the prism (fill and time);
+// the second argument is the thread count (1 or 2).
 #include <benchmark/benchmark.h>
 
 #include <map>
@@ -46,7 +47,8 @@ struct Fixture {
 };
 
 void run(benchmark::State& state, const std::map<std::string, std::string>& params) {
-    tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism, 2);
+    tbb::global_control parallelism(tbb::global_control::max_allowed_parallelism,
+                                    static_cast<std::size_t>(state.range(1)));
     Fixture& f = Fixture::get(static_cast<int>(state.range(0)));
     const MethodInfo& info = require_method("adaptive_beams");
     auto method = info.create(ParamSet::resolve(info.name, info.params, params));
@@ -66,7 +68,8 @@ void run(benchmark::State& state, const std::map<std::string, std::string>& para
     for (const auto& [name, ms] : stages) state.counters[name + "_ms"] = ms / static_cast<double>(state.iterations());
     state.counters["beams"] = static_cast<double>(last.health.get("beams_generated"));
     state.counters["fill"] = static_cast<double>(last.health.get("fill"));
-    state.SetLabel(state.range(0) == 0 ? "sphere_fog" : "pool_murky");
+    state.SetLabel(std::string(state.range(0) == 0 ? "sphere_fog" : "pool_murky") + ", " +
+                   std::to_string(state.range(1)) + " thread(s)");
 }
 
 void BM_Adaptive(benchmark::State& state) { run(state, {}); }
@@ -75,8 +78,8 @@ void BM_Prism(benchmark::State& state) { run(state, {{"hull", "prism"}}); }
 
 }  // namespace
 
-BENCHMARK(BM_Adaptive)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Repetitions(3)->ReportAggregatesOnly(true)->UseRealTime();
-BENCHMARK(BM_Uniform64)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Repetitions(3)->ReportAggregatesOnly(true)->UseRealTime();
-BENCHMARK(BM_Prism)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Repetitions(3)->ReportAggregatesOnly(true)->UseRealTime();
+BENCHMARK(BM_Adaptive)->ArgsProduct({{0, 1}, {1, 2}})->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true)->UseRealTime();
+BENCHMARK(BM_Uniform64)->ArgsProduct({{0, 1}, {2}})->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true)->UseRealTime();
+BENCHMARK(BM_Prism)->ArgsProduct({{0, 1}, {2}})->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true)->UseRealTime();
 
 BENCHMARK_MAIN();

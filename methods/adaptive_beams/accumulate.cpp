@@ -1,5 +1,6 @@
 // Scan conversion of the beam hulls into the camera and the receiver map (Sec. 5.1-5.3).
 #include "accumulate.hpp"
+#include "ray_beam.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -100,6 +101,69 @@ void row_span(const Footprint& f, int y, int width, int& x0, int& x1) {
     x1 = static_cast<int>(std::min(width - 1.0, std::floor(hi - 0.5)));
 }
 
+// A beam's pixels: the union of the footprints of up to three pieces of its slab. A beam that passes a
+// focus (A(y) = 0, Sec. 4.3) is cut there: the convex hull of all six corners fills the waist between
+// its two cones with pixels whose rays miss the beam (on `sphere_fog` a third of all fragments); each
+// piece [ya, yb] still holds its part of the beam, as P_i(y) is linear in y and so every cross-section
+// in it lies in the hull of P_i(ya), P_i(yb).
+struct Coverage {
+    std::array<Footprint, 3> part;
+    int parts = 0;
+    int y_lo = 0, y_hi = -1;
+};
+
+Coverage coverage(const Beam& b, HullType hull, const std::array<glm::dvec3, 6>& corners, const CameraModel& cam,
+                  int width, int height, bool& clipped) {
+    Coverage cov;
+    double cut[4] = {b.y0};
+    int nc = 1;
+    if (hull == HullType::Tight && b.flipped) {
+        double r[2];
+        int nr = 0;
+        real_roots(b.a0, b.a1, b.a2, r, nr);
+        std::sort(r, r + nr);
+        for (int k = 0; k < nr; ++k)
+            if (r[k] > b.y0 && r[k] < b.y1) cut[nc++] = r[k];
+    }
+    cut[nc++] = b.y1;
+    clipped = false;
+    for (int k = 0; k + 1 < nc; ++k) {
+        std::array<glm::dvec3, 6> piece = corners;
+        if (nc > 2)
+            for (int i = 0; i < 3; ++i) piece[i] = b.point(i, cut[k]), piece[3 + i] = b.point(i, cut[k + 1]);
+        bool c = false;
+        Footprint f = footprint(piece, cam, width, height, c);
+        clipped = clipped || c;
+        if (f.y_lo > f.y_hi) continue;
+        cov.y_lo = cov.parts == 0 ? f.y_lo : std::min(cov.y_lo, f.y_lo);
+        cov.y_hi = cov.parts == 0 ? f.y_hi : std::max(cov.y_hi, f.y_hi);
+        cov.part[static_cast<std::size_t>(cov.parts++)] = std::move(f);
+    }
+    return cov;
+}
+
+// The pixel columns of row y the coverage holds, as disjoint sorted spans [x0, x1]; returns their number.
+int row_spans(const Coverage& cov, int y, int width, int (&spans)[3][2]) {
+    int n = 0;
+    for (int k = 0; k < cov.parts; ++k) {
+        const Footprint& f = cov.part[static_cast<std::size_t>(k)];
+        if (y < f.y_lo || y > f.y_hi) continue;
+        int x0, x1;
+        row_span(f, y, width, x0, x1);
+        if (x0 > x1) continue;
+        int m = n++;
+        while (m > 0 && spans[m - 1][0] > x0) spans[m][0] = spans[m - 1][0], spans[m][1] = spans[m - 1][1], --m;
+        spans[m][0] = x0, spans[m][1] = x1;
+    }
+    int kept = 0;
+    for (int k = 0; k < n; ++k)
+        if (kept > 0 && spans[k][0] <= spans[kept - 1][1] + 1)
+            spans[kept - 1][1] = std::max(spans[kept - 1][1], spans[k][1]);
+        else
+            spans[kept][0] = spans[k][0], spans[kept][1] = spans[k][1], ++kept;
+    return kept;
+}
+
 // The paper's low-pass filter of the surface caustics (Sec. 7): a tent of radius r over the covered
 // pixels of the same object (so that edges between objects stay sharp), normalised by the weights used.
 void low_pass(Image& img, const CameraGBuffer& g, int r) {
@@ -140,9 +204,11 @@ void accumulate_camera(const BeamSet& set, const Scene& scene, const CameraGBuff
     if (volume) *volume = Image(g.width, g.height);
     // Which beams take part: volume beams in the camera's medium, surface beams that end on a diffuse surface.
     const std::size_t nb = set.beams.size();
-    std::vector<Footprint> fp(nb);
+    std::vector<Coverage> fp(nb);
     std::vector<std::uint8_t> use(nb, 0);
     std::vector<std::uint8_t> clipped(nb, 0), fallback(nb, 0);
+    // Each volume beam seen from the camera, once (what its fragments share).
+    std::vector<RayBeam> seen(want_volume ? nb : 0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nb, 32), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t n = r.begin(); n != r.end(); ++n) {
             const Beam& b = set.beams[n];
@@ -150,13 +216,14 @@ void accumulate_camera(const BeamSet& set, const Scene& scene, const CameraGBuff
             const bool surf = surface && (set.ends[n] & kEndsOnDiffuse);
             if (!vol && !surf) continue;
             use[n] = static_cast<std::uint8_t>((vol ? 1 : 0) | (surf ? 2 : 0));
+            if (vol) seen[n] = RayBeam(b, cam.position, cam_medium);
             std::array<glm::dvec3, 6> corners;
             if (!hull_corners(b, s.hull, corners)) {
                 fallback[n] = 1;
                 hull_corners(b, HullType::Tight, corners);
             }
             bool c = false;
-            fp[n] = footprint(corners, cam, g.width, g.height, c);
+            fp[n] = coverage(b, s.hull, corners, cam, g.width, g.height, c);
             clipped[n] = c;
         }
     });
@@ -166,11 +233,17 @@ void accumulate_camera(const BeamSet& set, const Scene& scene, const CameraGBuff
         stats.prism_fallback += fallback[n];
         stats.offscreen += fp[n].y_lo > fp[n].y_hi;
     }
-    // Primary ray directions, once.
+    // Primary ray directions and the distances to the pixels' first hits, once.
     std::vector<glm::dvec3> dirs(static_cast<std::size_t>(g.width) * g.height);
+    std::vector<double> s_max(dirs.size());
     tbb::parallel_for(tbb::blocked_range<int>(0, g.height, kBandRows), [&](const tbb::blocked_range<int>& rows) {
         for (int y = rows.begin(); y != rows.end(); ++y)
-            for (int x = 0; x < g.width; ++x) dirs[g.index(x, y)] = cam.ray_direction(x + 0.5, y + 0.5);
+            for (int x = 0; x < g.width; ++x) {
+                const std::size_t i = g.index(x, y);
+                dirs[i] = cam.ray_direction(x + 0.5, y + 0.5);
+                s_max[i] = g.object[i] >= 0 ? glm::length(glm::dvec3(g.position[i]) - cam.position)
+                                            : std::numeric_limits<double>::infinity();
+            }
     });
     const int bands = (g.height + kBandRows - 1) / kBandRows;
     std::vector<std::int64_t> fill(static_cast<std::size_t>(bands), 0), clamp(static_cast<std::size_t>(bands), 0);
@@ -184,23 +257,21 @@ void accumulate_camera(const BeamSet& set, const Scene& scene, const CameraGBuff
                 const Beam& b = set.beams[n];
                 const MediumCoefficients mc = medium_at(scene, b.medium);
                 for (int y = std::max(r0, fp[n].y_lo); y <= std::min(r1, fp[n].y_hi); ++y) {
-                    int x0, x1;
-                    row_span(fp[n], y, g.width, x0, x1);
-                    for (int x = x0; x <= x1; ++x) {
-                        ++touched;
-                        const std::size_t i = g.index(x, y);
-                        const glm::dvec3 w = dirs[i];
-                        if (use[n] & 1) {
-                            const double s_max = g.object[i] >= 0 ? glm::length(glm::dvec3(g.position[i]) - cam.position)
-                                                                  : std::numeric_limits<double>::infinity();
-                            volume->at(x, y) += static_cast<float>(
-                                volume_radiance(b, cam_medium, cam.position, w, s_max, s.volume_samples, counters,
-                                                kVolumeNearDistance));
+                    int spans[3][2];
+                    const int ns = row_spans(fp[n], y, g.width, spans);
+                    for (int k = 0; k < ns; ++k) {
+                        for (int x = spans[k][0]; x <= spans[k][1]; ++x) {
+                            ++touched;
+                            const std::size_t i = g.index(x, y);
+                            const glm::dvec3 w = dirs[i];
+                            if (use[n] & 1)
+                                volume->at(x, y) += static_cast<float>(
+                                    seen[n].radiance(w, s_max[i], s.volume_samples, counters, kVolumeNearDistance));
+                            if ((use[n] & 2) && g.covered[i])
+                                surface->at(x, y) += static_cast<float>(surface_irradiance(
+                                    b, mc.extinction(), glm::dvec3(g.position[i]), glm::dvec3(g.normal[i]), true, s.end_tol,
+                                    counters));
                         }
-                        if ((use[n] & 2) && g.covered[i])
-                            surface->at(x, y) += static_cast<float>(surface_irradiance(
-                                b, mc.extinction(), glm::dvec3(g.position[i]), glm::dvec3(g.normal[i]), true, s.end_tol,
-                                counters));
                     }
                 }
             }

@@ -1,5 +1,6 @@
 // Beam space, the area function, point-in-beam and the ray-beam integral (Sec. 4.3, 5.1-5.3).
 #include "beam.hpp"
+#include "ray_beam.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,22 +9,6 @@ namespace caustics::adaptive_beams {
 namespace {
 
 double cross2(const glm::dvec2& a, const glm::dvec2& b) { return a.x * b.y - a.y * b.x; }
-
-// Real roots of a + b s + c s^2 appended to `out` (a linear or constant polynomial where c vanishes
-// against the other coefficients).
-void roots(double a, double b, double c, double* out, int& n) {
-    const double scale = std::max({std::abs(a), std::abs(b), std::abs(c)});
-    if (scale == 0.0) return;
-    if (std::abs(c) <= 1e-12 * scale) {
-        if (std::abs(b) > 1e-14 * scale) out[n++] = -a / b;
-        return;
-    }
-    const double disc = b * b - 4.0 * a * c;
-    if (disc < 0.0) return;
-    const double q = -0.5 * (b + std::copysign(std::sqrt(disc), b));
-    out[n++] = q / c;
-    if (q != 0.0) out[n++] = a / q;
-}
 
 // Barycentric coordinates of in-plane point q in the cross-section at y; false when A is exactly zero.
 bool barycentric(const Beam& b, const glm::dvec2& q, double y, std::array<double, 3>& bary, double& area) {
@@ -113,7 +98,7 @@ BeamStatus make_beam(const std::array<EdgeRay, 3>& edges, double flux, int mediu
     b.a_min = clamp_ratio * a_start;
     double r[2];
     int nr = 0;
-    roots(b.a0, b.a1, b.a2, r, nr);
+    real_roots(b.a0, b.a1, b.a2, r, nr);
     for (int k = 0; k < nr; ++k)
         if (r[k] > b.y0 && r[k] < b.y1) b.flipped = true;
     out = b;
@@ -130,7 +115,7 @@ double min_area_ratio(const Beam& b) {
     }
     double r[2];
     int nr = 0;
-    roots(b.a0, b.a1, b.a2, r, nr);
+    real_roots(b.a0, b.a1, b.a2, r, nr);
     for (int k = 0; k < nr; ++k)
         if (r[k] > b.y0 && r[k] < b.y1) m = 0.0;
     return a_start > 0.0 ? m / a_start : 0.0;
@@ -184,6 +169,12 @@ double surface_irradiance(const Beam& b, double sigma_t, const glm::dvec3& x, co
 
 double volume_radiance(const Beam& b, const MediumCoefficients& medium, const glm::dvec3& o, const glm::dvec3& w,
                        double s_max, int samples, BeamCounters& counters, double s_min) {
+    return RayBeam(b, o, medium).radiance(w, s_max, samples, counters, s_min);
+}
+
+double volume_radiance_pointwise(const Beam& b, const MediumCoefficients& medium, const glm::dvec3& o,
+                                 const glm::dvec3& w, double s_max, int samples, BeamCounters& counters,
+                                 double s_min) {
     const glm::dvec3 r0 = o - b.c;
     const double yo = glm::dot(r0, b.n), yw = glm::dot(w, b.n);
     const glm::dvec2 q0{glm::dot(r0, b.e1), glm::dot(r0, b.e2)}, qw{glm::dot(w, b.e1), glm::dot(w, b.e2)};
@@ -218,10 +209,10 @@ double volume_radiance(const Beam& b, const MediumCoefficients& medium, const gl
         const glm::dvec2 a = b.p[j] + yo * b.g[j] - q0, bb = yw * b.g[j] - qw;
         const glm::dvec2 c = b.p[l] + yo * b.g[l] - q0, d = yw * b.g[l] - qw;
         const double f0 = cross2(a, c), f1 = cross2(a, d) + cross2(bb, c), f2 = cross2(bb, d);
-        roots(f0, f1, f2, cand, nc);
+        real_roots(f0, f1, f2, cand, nc);
         A0 += f0, A1 += f1, A2 += f2;
     }
-    roots(A0, A1, A2, cand, nc);
+    real_roots(A0, A1, A2, cand, nc);
     int kept = 1;
     for (int k = 1; k < nc; ++k)
         if (cand[k] > s_lo && cand[k] < s_hi) cand[kept++] = cand[k];

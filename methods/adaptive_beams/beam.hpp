@@ -11,7 +11,9 @@
 // The base plane goes through the centroid of the three start points (the specular surface) with n the
 // mean edge direction, so that beams leaving a curved surface or a second interface are all expressed
 // alike; each edge keeps its own start ys_i and end ye_i (first surface hit, or extrusion limit).
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 
 #include <glm/glm.hpp>
@@ -75,8 +77,31 @@ double surface_irradiance(const Beam& b, double sigma_t, const glm::dvec3& x, co
 // beam (roots of the three edge functions and of A, quadratic in s), each integrated by Gauss-Legendre
 // with `samples` points (1: the paper's midpoint), with extinction along the light's path in the beam and
 // towards the camera, and the Henyey-Greenstein phase function.
+// Evaluated through RayBeam (ray_beam.hpp), which hoists what one origin shares.
 double volume_radiance(const Beam& b, const MediumCoefficients& medium, const glm::dvec3& o, const glm::dvec3& w,
                        double s_max, int samples, BeamCounters& counters, double s_min = 0.0);
+
+// The same integral point by point: each node's cross-section, barycentric coordinates and local ray
+// built afresh. RayBeam's regrouped sums are checked against it (equal to rounding).
+double volume_radiance_pointwise(const Beam& b, const MediumCoefficients& medium, const glm::dvec3& o,
+                                 const glm::dvec3& w, double s_max, int samples, BeamCounters& counters,
+                                 double s_min = 0.0);
+
+// Real roots of a + b s + c s^2 appended to `out` (a linear or constant polynomial where c vanishes
+// against the other coefficients).
+inline void real_roots(double a, double b, double c, double* out, int& n) {
+    const double scale = std::max({std::abs(a), std::abs(b), std::abs(c)});
+    if (scale == 0.0) return;
+    if (std::abs(c) <= 1e-12 * scale) {
+        if (std::abs(b) > 1e-14 * scale) out[n++] = -a / b;
+        return;
+    }
+    const double disc = b * b - 4.0 * a * c;
+    if (disc < 0.0) return;
+    const double q = -0.5 * (b + std::copysign(std::sqrt(disc), b));
+    out[n++] = q / c;
+    if (q != 0.0) out[n++] = a / q;
+}
 
 enum class HullType { Tight, Prism };
 
