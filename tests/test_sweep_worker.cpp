@@ -13,6 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <caustics/run/render_run.hpp>
 #include <caustics/util/image_io.hpp>
 #include "test_support.hpp"
 
@@ -51,6 +52,41 @@ std::string without_timing(const std::string& message) {
     if (message.rfind(prefix, 0) != 0) return message;
     const std::size_t end = message.find("; ");
     return end == std::string::npos ? "" : message.substr(end + 2);
+}
+
+// The store a worker keeps (LoadedFrame): the next run of the same scene file and frame reuses the
+// scene frame, another frame replaces it, and the metrics are those of a run without the store.
+TEST(SweepWorker, LoadedFrameIsReusedForTheSameSceneFrameOnly) {
+    caustics::RenderOptions o;
+    o.scene_path = "pool";   // animated: frames 0 and 1 are two scene frames
+    o.method = "caustic_triangles";
+    o.overrides = {{"grid", "16"}};
+    o.warmup = 0;
+    o.repeats = 1;
+    o.no_reference = true;   // the reference's reuse is covered by the sweeps below
+    o.threads = 2;
+    const json alone = caustics::run_render(o).metrics;
+    caustics::LoadedFrame kept;
+    caustics::keep_loaded_frame(&kept);
+    const json first = caustics::run_render(o).metrics;
+    const caustics::SceneFrame* frame = kept.frame.get();
+    ASSERT_NE(frame, nullptr);
+    o.overrides = {{"grid", "32"}};
+    const json second = caustics::run_render(o).metrics;
+    EXPECT_EQ(kept.frame.get(), frame) << "the same scene frame was built again";
+    o.frame = 1;
+    (void)caustics::run_render(o);
+    EXPECT_NE(kept.scene_key.find("\n1"), std::string::npos) << kept.scene_key;
+    caustics::keep_loaded_frame(nullptr);
+    json a = alone, b = first;
+    for (const std::string& key : kTimingKeys) {
+        a.erase(key);
+        b.erase(key);
+    }
+    a["message"] = without_timing(a.value("message", ""));
+    b["message"] = without_timing(b.value("message", ""));
+    EXPECT_EQ(a, b);
+    EXPECT_EQ(second["params"]["grid"], 32);
 }
 
 // A small sweep of cheap methods on two scenes (one with an analytic truth, one measured against the
