@@ -1,5 +1,5 @@
 // caustics sweep SPEC [--out DIR] [--resume] [--axis METHOD.AXIS=VALUES]... [--yes] [--threads T] [--dry-run]
-//                     [--shard I/N] [--references-only] [--slurm N [--slurm-args "..."]]
+//                     [--shard I/N] [--references-only] [--isolate-runs] [--slurm N [--slurm-args "..."]]
 // caustics sweep merge DIR | caustics sweep status DIR      (sharded sweeps: harness/sweep/shard.hpp)
 #include <filesystem>
 #include <iostream>
@@ -66,6 +66,7 @@ int slurm_command(const SweepOptions& o, int tasks, const std::string& extra, bo
     plan.reference_tasks = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(tasks), std::max<std::size_t>(1, pairs.size())));
     plan.cpus_per_task = o.threads > 0 ? o.threads : 1;
     plan.timeout_s = o.timeout_s;
+    plan.isolate_runs = o.isolate_runs;
     plan.extra_args = extra;
     const SlurmScripts scripts = write_slurm_scripts(plan);
     std::cout << "sweep: " << runs.size() << " runs in " << tasks << " array tasks, " << pairs.size()
@@ -118,6 +119,9 @@ Command make_sweep_command() {
         app.add_option("--shard", *shard, "Run shard I of N (I/N) into DIR/shards/I; `sweep merge DIR` joins them");
         app.add_flag("--references-only", o->references_only,
                      "Compute the references the sweep needs (shard I of N of them with --shard) and run nothing");
+        app.add_flag("--isolate-runs", o->isolate_runs,
+                     "Start a `caustics render` process per run instead of a worker process that keeps the scene "
+                     "frame and reference loaded between runs (same results; slower)");
         app.add_option("--slurm", *slurm, "Write and submit Slurm job arrays: references, N run tasks, merge + report")
             ->check(CLI::Range(1, kMaxShards));
         app.add_option("--slurm-args", *slurm_args, "Extra sbatch arguments for every job, e.g. \"--partition=cpu\"");

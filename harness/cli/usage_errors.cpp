@@ -16,7 +16,8 @@ std::string join(const std::vector<std::string>& items) {
 
 std::string command_names(const CLI::App& top) {
     std::vector<std::string> names;
-    for (const CLI::App* sub : top.get_subcommands([](const CLI::App*) { return true; })) names.push_back(sub->get_name());
+    for (const CLI::App* sub : top.get_subcommands([](const CLI::App*) { return true; }))
+        if (!sub->get_group().empty()) names.push_back(sub->get_name());   // hidden commands are not offered
     return join(names);
 }
 

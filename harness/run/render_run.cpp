@@ -248,27 +248,67 @@ RenderRun run_method(const SceneFrame& sf, const ResolvedMethod& m, const Render
     return run;
 }
 
+namespace {
+
+LoadedFrame* g_loaded = nullptr;
+
+// What decides the reference besides the scene frame: its settings (as `caustics render` arguments, the
+// complete list) and the cache folder it is read from.
+std::string reference_store_key(const RenderOptions& options) {
+    std::string key = options.cache_dir.empty() ? default_cache_dir() : options.cache_dir;
+    for (const std::string& a : reference_arguments(reference_settings(options))) key.append("\n").append(a);
+    return key;
+}
+
+}  // namespace
+
+void keep_loaded_frame(LoadedFrame* store) { g_loaded = store; }
+
 RenderRun run_render(const RenderOptions& options) {
     ThreadLimit limit(options.threads);
-    // Every InputError comes from these three steps, before anything is written.
-    Scene scene = load_scene(resolve_scene_path(options.scene_path));
-    const ResolvedMethod method = resolve_method(options.method, options.overrides);
-    const SceneFrame sf(std::move(scene), options.frame);
+    // Every InputError comes from these three steps, before anything is written: loading the scene,
+    // resolving the method, building the frame (in this order). A kept scene frame passed the first and
+    // the last already.
+    const std::string scene_path = resolve_scene_path(options.scene_path);
+    const std::string scene_key = scene_path + "\n" + std::to_string(options.frame);
+    LoadedFrame* kept = g_loaded;
+    std::unique_ptr<SceneFrame> own;
+    const SceneFrame* sf = nullptr;
+    std::optional<ResolvedMethod> method;
+    if (kept && kept->frame && kept->scene_key == scene_key) {
+        method = resolve_method(options.method, options.overrides);
+        sf = kept->frame.get();
+    } else {
+        if (kept) *kept = LoadedFrame{};   // free the old frame and reference before building the new one
+        Scene scene = load_scene(scene_path);
+        method = resolve_method(options.method, options.overrides);
+        own = std::make_unique<SceneFrame>(std::move(scene), options.frame);
+        sf = own.get();
+        if (kept) {
+            kept->scene_key = scene_key;
+            kept->frame = std::move(own);
+        }
+    }
 
     std::optional<ReferenceResult> reference;
     ReferenceProvider provider;
     if (!options.no_reference)
         provider = [&]() -> const ReferenceResult* {
-            reference = reference_for(sf, options);
-            return &*reference;
+            if (!kept) {
+                reference = reference_for(*sf, options);
+                return &*reference;
+            }
+            const std::string key = reference_store_key(options);
+            if (!kept->reference || kept->reference_key != key) {
+                kept->reference.reset();
+                kept->reference = std::make_unique<ReferenceResult>(reference_for(*sf, options));
+                kept->reference_key = key;
+            }
+            return kept->reference.get();
         };
-    RenderRun run = run_method(sf, method, options, provider);
-    if (!options.out_dir.empty()) write_render_outputs(options.out_dir, sf, run, options);
+    RenderRun run = run_method(*sf, *method, options, provider);
+    if (!options.out_dir.empty()) write_render_outputs(options.out_dir, *sf, run, options);
     return run;
 }
-
-// ---------------------------------------------------------------------------------------------------
-
-// ---------------------------------------------------------------------------------------------------
 
 }  // namespace caustics

@@ -56,4 +56,21 @@ void write_render_outputs(const std::string& dir, const SceneFrame& sf, const Re
 // The whole `caustics render`: every InputError is thrown before anything is written.
 RenderRun run_render(const RenderOptions& options);
 
+// What a process that renders many runs in sequence (the sweep worker, sweep/worker.hpp) keeps between
+// them: the scene frame of its last run (by resolved scene path and frame) and the reference of its last
+// reference settings and cache folder. run_render uses the store installed with keep_loaded_frame and
+// loads, builds or reads only what differs from the last run. The results are the same as a fresh
+// process's: the scene frame is built from the same file by the same deterministic code, and a cached
+// reference is rebuilt from the integer sums the cache stores (reference.hpp), the same values every time
+// it is read. A scene file edited while the store holds it is not noticed: a sweep fixes its scenes'
+// contents when it starts (its plan hashes them).
+struct LoadedFrame {
+    std::string scene_key;                 // resolved scene path and frame
+    std::unique_ptr<SceneFrame> frame;
+    std::string reference_key;             // reference settings and cache folder
+    std::unique_ptr<ReferenceResult> reference;
+};
+// Installs the store run_render uses (nullptr: none, the default); the caller owns it.
+void keep_loaded_frame(LoadedFrame* store);
+
 }  // namespace caustics

@@ -229,8 +229,10 @@ MergeSummary merge_shards(const std::string& dir_text) {
     json list = json::array();
     for (const Shard& s : shards) {
         json entry = {{"index", s.index}, {"runs", s.positions.size()}};
-        for (const char* key : {"host", "cpu", "cores", "threads", "started", "slurm", "resumed"})
+        for (const char* key : {"host", "cpu", "cores", "threads", "started", "slurm", "run_mode", "resumed"})
             if (s.manifest.contains(key)) entry[key] = s.manifest[key];
+        // The merged folder's run mode is the shards' where they agree, else only per shard.
+        if (s.manifest.value("run_mode", json()) != manifest.value("run_mode", json())) manifest.erase("run_mode");
         list.push_back(entry);
     }
     manifest["shards"] = list;

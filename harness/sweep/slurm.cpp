@@ -13,7 +13,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// The command line every task shares: program, sweep, spec, --out, --cache, --axis..., --yes.
+// The command line every task shares: program, sweep, spec, --out, --cache, --axis..., --yes, and
+// --timeout and --isolate-runs where given.
 std::string sweep_words(const SlurmPlan& p) {
     std::string s = shell_quote(p.program) + " sweep " + shell_quote(p.spec_path) + " --out " + shell_quote(p.out_dir) +
                     " --cache " + shell_quote(p.cache_dir) + " --yes --threads \"${SLURM_CPUS_PER_TASK:-" +
@@ -24,6 +25,7 @@ std::string sweep_words(const SlurmPlan& p) {
         std::snprintf(t, sizeof t, "%.17g", p.timeout_s);
         s += " --timeout " + std::string(t);
     }
+    if (p.isolate_runs) s += " --isolate-runs";
     return s;
 }
 

@@ -25,6 +25,7 @@ struct SlurmPlan {
     int reference_tasks = 1;      // min(N, reference pairs)
     int cpus_per_task = 1;
     double timeout_s = 0.0;       // per-run limit (0: the spec's)
+    bool isolate_runs = false;    // --isolate-runs: a process per run instead of a worker (sweep.hpp)
     std::string extra_args;       // --slurm-args, split on spaces, added to every sbatch call
 };
 

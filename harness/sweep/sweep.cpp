@@ -1,17 +1,13 @@
 #include <caustics/sweep/sweep.hpp>
 
-#include <signal.h>
-#include <sys/prctl.h>
-#include <sys/wait.h>
-#include <unistd.h>
-#include <fcntl.h>
-
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <set>
 #include <sstream>
 #include <thread>
@@ -23,6 +19,7 @@
 #include <caustics/api/registry.hpp>
 #include <caustics/run/render_run.hpp>
 #include <caustics/run/run_context.hpp>
+#include <caustics/sweep/worker.hpp>
 
 #include "detail/sweep_files.hpp"
 
@@ -36,58 +33,10 @@ using sweep_files::read_result_lines;
 
 namespace {
 
-struct ChildResult {
-    int exit_code = -1;
-    int signal = 0;
-    bool timed_out = false;
-};
-
 std::string self_executable() {
     std::error_code ec;
     fs::path p = fs::read_symlink("/proc/self/exe", ec);
     return ec ? std::string("caustics") : p.string();
-}
-
-// Runs argv with stdout and stderr appended to log_path. The child is killed if this process dies
-// (so an interrupted sweep leaves no run writing behind its back) or when it outlives timeout_s.
-ChildResult run_child(const std::vector<std::string>& argv, const std::string& log_path, double timeout_s) {
-    std::vector<char*> args;
-    for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
-    args.push_back(nullptr);
-    const pid_t parent = getpid();
-    const pid_t pid = fork();
-    if (pid < 0) throw std::runtime_error("sweep: fork failed");
-    if (pid == 0) {
-        if (prctl(PR_SET_PDEATHSIG, SIGKILL) != 0) _exit(127);
-        if (getppid() != parent) _exit(127);   // the parent died before prctl took effect
-        const int fd = open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-        if (fd >= 0) {
-            dup2(fd, STDOUT_FILENO);
-            dup2(fd, STDERR_FILENO);
-            close(fd);
-        }
-        execv(args[0], args.data());
-        _exit(127);
-    }
-    ChildResult result;
-    const auto start = std::chrono::steady_clock::now();
-    int status = 0;
-    while (true) {
-        const pid_t r = waitpid(pid, &status, timeout_s > 0 ? WNOHANG : 0);
-        if (r == pid) break;
-        if (r < 0) throw std::runtime_error("sweep: waitpid failed");
-        const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        if (elapsed > timeout_s) {
-            kill(pid, SIGKILL);
-            waitpid(pid, &status, 0);
-            result.timed_out = true;
-            break;
-        }
-        std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    }
-    if (WIFEXITED(status)) result.exit_code = WEXITSTATUS(status);
-    if (WIFSIGNALED(status)) result.signal = WTERMSIG(status);
-    return result;
 }
 
 std::string last_line_of(const std::string& path) {
@@ -322,6 +271,11 @@ SweepSummary compute_references(const SweepSpec& spec, const std::vector<Planned
 
 }  // namespace
 
+std::string run_mode(const SweepOptions& options) {
+    const bool other_program = !options.render_program.empty() && options.render_program != self_executable();
+    return options.isolate_runs || other_program ? "isolated" : "worker";
+}
+
 std::set<std::string> csv_param_names(const SweepSpec& spec) {
     std::set<std::string> param_names;
     for (const auto& m : spec.methods)
@@ -483,10 +437,12 @@ SweepSummary run_sweep(const SweepOptions& options) {
         manifest["spec_path"] = options.spec_path;
         manifest["spec"] = spec.as_run;
         manifest["runs_planned"] = runs.size();
+        manifest["run_mode"] = run_mode(options);
         if (const json slurm = slurm_environment(); !slurm.is_null()) manifest["slurm"] = slurm;
     } else {
         json resumed = run_context();
         resumed["spec_path"] = options.spec_path;
+        resumed["run_mode"] = run_mode(options);
         if (const json slurm = slurm_environment(); !slurm.is_null()) resumed["slurm"] = slurm;
         manifest["resumed"].push_back(resumed);
     }
@@ -517,6 +473,9 @@ SweepSummary run_sweep(const SweepOptions& options) {
     const std::string cache = options.cache_dir.empty() ? default_cache_dir() : options.cache_dir;
     const auto start = std::chrono::steady_clock::now();
     std::set<std::string> references_done;
+    // One worker for the sweep (replaced after a crash or timeout); null: a child per run.
+    std::unique_ptr<SweepWorker> worker;
+    if (run_mode(options) == "worker") worker = std::make_unique<SweepWorker>(program);
 
     for (const std::size_t position : positions) {
         const PlannedRun& run = runs[position];
@@ -554,7 +513,8 @@ SweepSummary run_sweep(const SweepOptions& options) {
             std::fprintf(stderr, "sweep [%zu/%zu] %s  (%.2f runs/s, ETA %s)\n", finished.size() + summary.ran + 1,
                          positions.size(), run.id.c_str(), done ? done / elapsed : 0.0, eta.c_str());
         }
-        const ChildResult child = run_child(argv, log, timeout);
+        const ChildResult child = worker ? worker->run(std::vector<std::string>(argv.begin() + 1, argv.end()), log, timeout)
+                                         : run_child(argv, log, timeout);
 
         json row;
         const fs::path metrics_path = run_dir / "metrics.json";

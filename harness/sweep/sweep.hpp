@@ -1,10 +1,13 @@
 #pragma once
 // The sweep runner (`caustics sweep SPEC --out DIR [--resume]`).
 //
-// Each run executes as a child `caustics render` process writing DIR/runs/<run-id>/, so that a method that
-// crashes, aborts or hangs is recorded as `failed` and the sweep goes on; the child dies with the sweep
-// (PR_SET_PDEATHSIG). References are computed once per scene and frame by the sweep itself, through the
-// on-disk cache that the children then read.
+// Each run executes in a child process writing DIR/runs/<run-id>/, so that a method that crashes, aborts
+// or hangs is recorded as `failed` and the sweep goes on; the child dies with the sweep
+// (PR_SET_PDEATHSIG). By default the child is a worker that renders run after run with the scene frame and
+// reference kept loaded (worker.hpp); --isolate-runs starts a `caustics render` process per run instead.
+// Both record the same results (timing aside); manifest.json says which ran ("run_mode"). References are
+// computed once per scene and frame by the sweep itself, through the on-disk cache that the children
+// then read.
 //
 // Files: DIR/manifest.json (context + spec as run + the plan and its hash), DIR/results.jsonl (one line
 // per finished run, the source of truth), DIR/results.csv (derived from it), DIR/references/<scene>-f<frame>/,
@@ -41,6 +44,7 @@ struct SweepOptions {
     int threads = 0;
     std::string cache_dir;                     // empty: default_cache_dir()
     std::string render_program;                // the `caustics` executable; empty: this process's
+    bool isolate_runs = false;                 // one `caustics render` process per run (no worker)
     double timeout_s = 0.0;                    // per-run limit; 0: the spec's timing.timeout_s or none
     bool progress = true;
     ShardId shard;                             // --shard I/N: shard I of N into out_dir/shards/I (shard.hpp)
@@ -49,6 +53,11 @@ struct SweepOptions {
 };
 
 constexpr std::size_t kMaxRunsWithoutConfirmation = 500;
+
+// "worker" or "isolated": how the sweep runs its runs. Workers are used unless isolate_runs is set or
+// render_program names another program than this one, which need not know the worker's protocol (the
+// worker is this program's own hidden `sweep-worker` command).
+std::string run_mode(const SweepOptions& options);
 
 struct SweepSummary {
     std::size_t total = 0, done_before = 0, ran = 0, ok = 0, skipped = 0, failed = 0, unstable = 0;

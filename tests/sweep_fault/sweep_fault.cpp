@@ -1,0 +1,60 @@
+// sweep_fault: a method plugin that fails on request, for the sweep's isolation tests
+// (tests/test_sweep_worker.cpp). With fault=none it renders nothing and is ok; with segv it dies of
+// SIGSEGV, with abort of SIGABRT, with hang it never returns: what a broken method does to the process
+// that runs it, in a per-run child or in a sweep worker alike. The fault strikes inside render(), in
+// the timed region, after the scene, the frame and the method's preparation have succeeded.
+#include <chrono>
+#include <csignal>
+#include <cstdlib>
+#include <memory>
+#include <thread>
+
+#include <caustics/api/method.hpp>
+#include <caustics/api/registry.hpp>
+
+namespace sweep_fault {
+namespace {
+
+using namespace caustics;
+
+class SweepFault final : public Method {
+public:
+    explicit SweepFault(std::string fault) : fault_(std::move(fault)) {}
+
+    Capability capabilities(const Scene&) const override { return Capability::yes(); }
+
+    CausticOutput render(const FrameGeometry&, const RenderRequest&) override {
+        if (fault_ == "segv") std::raise(SIGSEGV);
+        if (fault_ == "abort") std::abort();
+        if (fault_ == "hang")
+            while (true) std::this_thread::sleep_for(std::chrono::seconds(1));
+        return {};
+    }
+
+    AccuracyClaim accuracy_claim(const FrameGeometry&) const override {
+        return AccuracyClaim::outside("draws nothing: a test of failing runs");
+    }
+
+private:
+    std::string fault_;
+};
+
+MethodInfo info() {
+    MethodInfo m;
+    m.name = "sweep_fault";
+    m.doc = "Fails on request (fault=segv|abort|hang), else renders nothing: the sweep's isolation tests";
+    m.params = {
+        {"grid", ParamType::Int, "1", 1, 1, {}, "no grid (only 1 is valid)"},
+        {"iterations", ParamType::Int, "1", 1, 1, {}, "nothing iterates (only 1 is valid)"},
+        {"fault", ParamType::Enum, "none", 0, 0, {"none", "segv", "abort", "hang"}, "how render() fails"},
+    };
+    m.create = [](const ParamSet& p) -> std::unique_ptr<Method> {
+        return std::make_unique<SweepFault>(p.get_enum("fault"));
+    };
+    return m;
+}
+
+}  // namespace
+}  // namespace sweep_fault
+
+CAUSTICS_REGISTER_METHOD(sweep_fault::info);
