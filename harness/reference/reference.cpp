@@ -449,7 +449,12 @@ std::vector<RecordedRay> record_reference_rays(const RayTracer& tracer, const Re
         for (std::uint64_t first = 0; first < per; first += kBatchSize) {
             const std::uint64_t last = std::min(per, first + kBatchSize);
             transport.batch_order(r, first, last, order, scratch);
-            for (const std::uint32_t i : order) transport.trace(r, first + i, ledger, acc, recorder);
+            for (const std::uint32_t i : order) {
+                const std::size_t before = recorder.rays.size();
+                transport.trace(r, first + i, ledger, acc, recorder);
+                for (std::size_t k = before; k < recorder.rays.size(); ++k)
+                    recorder.rays[k].segment = static_cast<std::uint8_t>(std::min<std::size_t>(k - before, 255));
+            }
         }
     }
     return std::move(recorder.rays);

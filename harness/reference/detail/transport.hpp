@@ -45,6 +45,7 @@ struct RayRecorder {
         r.tnear = static_cast<float>(std::max(tmin, offset));
         r.tfar = tmax >= 3e38 ? std::numeric_limits<float>::infinity() : static_cast<float>(tmax);
         r.shadow = shadow;
+        r.segment = 0;   // set per photon by record_reference_rays
         rays.push_back(r);
     }
 };
