@@ -60,10 +60,10 @@ constexpr std::size_t kChunkSize = 2048;
 
 using detail::Accumulators;
 using detail::kFixedScale;
-using detail::NoRayLog;
 using detail::PixelInfo;
 using detail::RayRecorder;
 using detail::Transport;
+using detail::WaveScratch;
 
 void add_ledger(FluxLedger& sum, const FluxLedger& l) {
     sum.emitted += l.emitted;
@@ -149,6 +149,7 @@ void trace_photons(const Transport& transport, ReferenceSums& sums, std::uint64_
         a.volume.assign(volume_pixels * replicas, 0);
         return a;
     });
+    tbb::enumerable_thread_specific<WaveScratch> waves;
     const std::uint64_t per_replica_batches = (to - from + kBatchSize - 1) / kBatchSize;
     const std::uint64_t batches = per_replica_batches * replicas;
     std::vector<FluxLedger> batch_ledgers(batches);
@@ -167,12 +168,11 @@ void trace_photons(const Transport& transport, ReferenceSums& sums, std::uint64_
                 acc.bin_offset = replica * bins;
                 acc.pixel_offset = replica * pixels;
                 acc.volume_offset = replica * volume_pixels;
-                NoRayLog log;
+                WaveScratch& wave = waves.local();
                 for (std::size_t c = cr.begin(); c < cr.end(); ++c) {
                     FluxLedger ledger;
-                    const std::size_t end = std::min(order.size(), (c + 1) * kChunkSize);
-                    for (std::size_t j = c * kChunkSize; j < end; ++j)
-                        transport.trace(replica, first + order[j], ledger, acc, log);
+                    const std::size_t begin = c * kChunkSize, end = std::min(order.size(), begin + kChunkSize);
+                    transport.trace_wave(replica, first, order.data() + begin, end - begin, ledger, acc, wave);
                     chunk_ledgers[c] = ledger;
                 }
             });

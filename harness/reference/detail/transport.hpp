@@ -26,16 +26,14 @@ namespace caustics::detail {
 // one replica stay below 2^60, and each contribution keeps ~2^-30 relative precision.
 constexpr double kFixedScale = 1073741824.0;  // 2^30
 
-inline void add_fixed(std::int64_t& acc, double x) {
+inline std::int64_t to_fixed(double x) {
     // x >= 0: adding 1/2 and truncating rounds to nearest, without a libm call.
-    acc += static_cast<std::int64_t>(x * kFixedScale + 0.5);
+    return static_cast<std::int64_t>(x * kFixedScale + 0.5);
 }
 
-// Ray logs: NoRayLog compiles away; RayRecorder keeps every query for bench/ replays.
-struct NoRayLog {
-    void ray(const glm::dvec3&, const glm::dvec3&, double, double, bool) {}
-};
+inline void add_fixed(std::int64_t& acc, double x) { acc += to_fixed(x); }
 
+// The ray log of record_reference_rays: every query, for bench/ replays.
 struct RayRecorder {
     double offset = 0.0;   // the tracer's own minimum tnear
     std::vector<RecordedRay> rays;
@@ -64,6 +62,49 @@ struct Accumulators {
 struct PixelInfo {
     double scale = 0.0;
     int object = -1;
+};
+
+// One photon in flight: what its next segment needs.
+struct PhotonState {
+    PhotonSampler rng;
+    glm::dvec3 origin{0.0}, dir{0.0};
+    double w = 0.0;             // weight q now
+    double u_dispersion = 0.0;  // its dispersion sample (dimension 2)
+    int next_dim = 3;           // next sample dimension to read
+    int depth = 0;              // specular events so far
+    int inside = -1;            // dielectric object the photon travels in (-1: outside medium)
+    std::uint32_t slot = 0;     // its place in the photon order of its chunk (ledger events)
+};
+
+// One addition to the flux ledger. The ledger is a floating-point sum, so its bits depend on the order of
+// the additions: a wave of photons books events and the chunk replays them in photon order (each
+// photon's own in the order it made them), the order of tracing one photon after another.
+struct LedgerEvent {
+    std::uint32_t slot;
+    double FluxLedger::*field;
+    double value;
+};
+
+// A visibility query whose integer increment lands in `target` when nothing blocks it (camera deposits
+// and camera_volume points). Deferred so that a wave's queries go to Embree as packets.
+struct ShadowQuery {
+    RayQuery ray;
+    std::int64_t* target;
+    std::int64_t increment;
+    bool saturating;   // camera_volume: add_saturating (reference_volume.cpp)
+};
+
+// Per thread: the wave's buffers, kept from chunk to chunk.
+struct WaveScratch {
+    std::vector<PhotonState> photons;
+    std::vector<std::uint32_t> active, next;
+    std::vector<RayQuery> queries;
+    std::vector<Hit> hits;
+    std::vector<ShadowQuery> shadows;
+    std::vector<RayQuery> shadow_rays;
+    std::vector<std::uint8_t> occluded;
+    std::vector<LedgerEvent> events, sorted;
+    std::vector<std::uint32_t> event_start;
 };
 
 // Everything one photon needs, shared read-only by all threads.
@@ -97,19 +138,38 @@ struct Transport {
     }
     void batch_order(std::uint32_t replica, std::uint64_t first, std::uint64_t last, std::vector<std::uint32_t>& order,
                      std::vector<std::uint32_t>& scratch) const;
-    template <class Log>
-    void trace(std::uint32_t replica, std::uint64_t i, FluxLedger& ledger, Accumulators& acc, Log& log) const;
+    // Photon i of a replica as it leaves its light; books its emitted weight.
+    PhotonState start(std::uint32_t replica, std::uint64_t i, std::uint32_t slot, std::vector<LedgerEvent>& ledger) const;
+    // Everything one segment does after its closest-hit query `hit`: extinction, the camera_volume
+    // point, the deposit, or the next direction. Ledger additions go to `ledger`, visibility queries to
+    // `shadows` (the caller resolves both). False when the photon's path has ended.
+    bool step(PhotonState& p, const Hit& hit, std::vector<LedgerEvent>& ledger, Accumulators& acc,
+              std::vector<ShadowQuery>& shadows) const;
+    // One photon, one query at a time, each logged (record_reference_rays).
+    void trace(std::uint32_t replica, std::uint64_t i, FluxLedger& ledger, Accumulators& acc, RayRecorder& log) const;
+    // Photons first + order[0 .. n) of one replica, in that order as far as the ledger's bits go, traced
+    // as waves: all live photons' next segments as one batch of packet queries, then their visibility
+    // queries as another (reference_wavefront.cpp). Adds to `ledger` and `acc`.
+    void trace_wave(std::uint32_t replica, std::uint64_t first, const std::uint32_t* order, std::size_t n,
+                    FluxLedger& ledger, Accumulators& acc, WaveScratch& scratch) const;
     // The pixel a deposit at p would land in, or -1 (outside the image or behind the camera).
     std::ptrdiff_t camera_pixel(const glm::dvec3& p) const;
-    template <class Log>
     void deposit_camera(const Hit& hit, std::size_t index, const glm::dvec3& dir_in, double w, Accumulators& acc,
-                        Log& log) const;
+                        std::vector<ShadowQuery>& shadows) const;
     // camera_volume: one scattering point on the segment origin + t dir, t in [0, length) (length may
     // be infinite), of a photon of weight w at the segment's start; `u` is its sample value.
-    template <class Log>
     void scatter_to_camera(const glm::dvec3& origin, const glm::dvec3& dir, double length, double w, double u,
-                           const MediumCoefficients& medium, Accumulators& acc, Log& log) const;
+                           const MediumCoefficients& medium, Accumulators& acc, std::vector<ShadowQuery>& shadows) const;
 };
+
+// Adds a resolved visibility query's increment (when not occluded).
+inline void apply_shadow(const ShadowQuery& q) {
+    if (q.saturating) {
+        if (__builtin_add_overflow(*q.target, q.increment, q.target)) *q.target = std::numeric_limits<std::int64_t>::max();
+    } else {
+        *q.target += q.increment;
+    }
+}
 
 // The media and, when `volume`, the camera_volume set-up of `transport` (reference_volume.cpp).
 void setup_media(Transport& transport, const Scene& scene, bool volume);
