@@ -129,3 +129,47 @@ TEST(RayTracerBatches, SameHitsAsSingleRays) {
     for (const char* scene : {"pool.json", "sphere.json", "bunny.json", "sphere_fog.json"})
         expect_batches_match_single_rays(scene);
 }
+
+namespace {
+
+std::uint32_t naive_reverse(std::uint32_t x) {
+    std::uint32_t r = 0;
+    for (int b = 0; b < 32; ++b) r |= ((x >> b) & 1u) << (31 - b);
+    return r;
+}
+
+// The sampler's definition (photon_sampler.hpp), written out the slow way: a shuffled index per pair,
+// the pair's Sobol' point, each dimension Owen-scrambled with its own seed.
+double sobol_by_definition(std::uint64_t seed, std::uint32_t replica, std::uint32_t index, int dim) {
+    const std::uint64_t replica_seed = mix64(seed * 0x9E3779B97F4A7C15ull + replica + 1);
+    const std::uint64_t pair_seed = mix64(replica_seed + static_cast<std::uint64_t>(dim >> 1) * 0xA24BAED4963EE407ull);
+    const std::uint32_t shuffled = owen_scramble(index, static_cast<std::uint32_t>(pair_seed));
+    const std::uint32_t raw = (dim & 1) ? sobol_dim1(shuffled) : naive_reverse(shuffled);
+    const std::uint32_t scrambled = owen_scramble(raw, static_cast<std::uint32_t>(pair_seed >> 32) ^ (dim & 1 ? 0x68bc21ebu : 0u));
+    return (static_cast<double>(scrambled) + 0.5) * 0x1.0p-32;
+}
+
+}  // namespace
+
+// The table-driven sampler gives the values of its definition, bit for bit, in every quasi-random
+// dimension, alone (get) and in pairs (get2).
+TEST(PhotonSamplerBits, SameValuesAsTheDefinition) {
+    std::size_t mismatches = 0;
+    for (std::uint32_t replica = 0; replica < 3; ++replica)
+        for (std::uint32_t index = 0; index < 4000; index = index * 3 + 1 + (index >> 4)) {
+            const PhotonSampler s(SamplerKind::Sobol, 7, replica, index);
+            for (int dim = 0; dim < kQuasiDimensions; ++dim) {
+                const double expected = sobol_by_definition(7, replica, index, dim);
+                mismatches += s.get(dim) == expected ? 0 : 1;
+                double a, b;
+                s.get2(dim, a, b);
+                mismatches += a == expected ? 0 : 1;
+                mismatches += b == (dim + 1 < kQuasiDimensions ? sobol_by_definition(7, replica, index, dim + 1) : s.get(dim + 1)) ? 0 : 1;
+            }
+        }
+    EXPECT_EQ(mismatches, 0u);
+    // sobol_dim1 is the Sobol' generator of x + 1: digit k of the index adds direction number v_k.
+    EXPECT_EQ(sobol_dim1(1), 0x80000000u);
+    EXPECT_EQ(sobol_dim1(2), 0xC0000000u);
+    EXPECT_EQ(sobol_dim1(3), 0x40000000u);
+}

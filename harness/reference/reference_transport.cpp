@@ -28,23 +28,25 @@ double fresnel_reflectance(double cos_i, double cos_t, double n_i, double n_t) {
 }  // namespace
 
 void Transport::batch_order(std::uint32_t replica, std::uint64_t first, std::uint64_t last,
-                            std::vector<std::uint32_t>& order, std::vector<std::uint32_t>& scratch) const {
+                            std::vector<std::uint32_t>& order, std::vector<std::uint32_t>& scratch,
+                            std::vector<glm::dvec2>& emission) const {
+    emission.resize(static_cast<std::size_t>(last - first));
     photon_batch_order(
         emitters.size(), first, last,
         [&](std::uint64_t i, double& u1, double& u2) {
-            const PhotonSampler s = sampler_of(replica, i);
-            u1 = s.get(0), u2 = s.get(1);
+            sampler_of(replica, i).get2(0, u1, u2);
+            emission[static_cast<std::size_t>(i - first)] = {u1, u2};
         },
         order, scratch);
 }
 
-PhotonState Transport::start(std::uint32_t replica, std::uint64_t i, std::uint32_t slot,
+PhotonState Transport::start(std::uint32_t replica, std::uint64_t i, const glm::dvec2& emission, std::uint32_t slot,
                              std::vector<LedgerEvent>& ledger) const {
     PhotonState p;
     p.rng = sampler_of(replica, i);
     const std::size_t light = emitters.size() == 1 ? 0 : static_cast<std::size_t>(i % emitters.size());
-    emitters[light].sample(p.rng.get(0), p.rng.get(1), p.origin, p.dir);
-    p.u_dispersion = p.rng.get(2);
+    emitters[light].sample(emission.x, emission.y, p.origin, p.dir);
+    // Dimension 2 is the dispersion sample, read where a dispersive material is hit (step).
     // Dimensions 3, 4, ... in the order of use: each Fresnel choice, and each segment after a specular
     // event in a scattering medium (its camera_volume scattering point, drawn whether or not the view
     // is measured so that the other views do not depend on it). Scenes without scattering read exactly
@@ -91,13 +93,13 @@ bool Transport::step(PhotonState& p, const Hit& hit, std::vector<LedgerEvent>& l
             pixel = camera_pixel(hit.position);
             if (pixel >= 0) {
                 __builtin_prefetch(&pixel_info[static_cast<std::size_t>(pixel)]);
-                __builtin_prefetch(&acc.pixels[acc.pixel_offset + static_cast<std::size_t>(pixel)], 1);
+                __builtin_prefetch(&acc.pixels[static_cast<std::size_t>(pixel)], 1);
             }
         }
         if (hit.object == receiver_object) {
             ledger.push_back({p.slot, &FluxLedger::deposited_receiver, p.w});
             const int bin = chart->bin_of(hit.position);
-            if (bin >= 0) add_fixed(acc.bins[acc.bin_offset + static_cast<std::size_t>(bin)], p.w);
+            if (bin >= 0) add_sum(acc.bins[static_cast<std::size_t>(bin)], to_fixed(p.w));
         } else {
             ledger.push_back({p.slot, &FluxLedger::deposited_other, p.w});
         }
@@ -126,7 +128,8 @@ bool Transport::step(PhotonState& p, const Hit& hit, std::vector<LedgerEvent>& l
         p.origin = hit.position;
         return true;   // the medium does not change at a mirror
     }
-    const double ior = material.ior + material.dispersion * p.u_dispersion;
+    // Without dispersion ior + 0 * u is ior: the sample is read only where it matters.
+    const double ior = material.dispersion != 0.0 ? material.ior + material.dispersion * p.rng.get(2) : material.ior;
     const double n_i = from_outside ? outside_ior : ior;
     const double n_t = from_outside ? ior : outside_ior;
     const double eta = n_i / n_t;
@@ -149,7 +152,9 @@ void Transport::trace(std::uint32_t replica, std::uint64_t i, FluxLedger& ledger
                       RayRecorder& log) const {
     std::vector<LedgerEvent> events;
     std::vector<ShadowQuery> shadows;
-    PhotonState p = start(replica, i, 0, events);
+    glm::dvec2 emission;
+    sampler_of(replica, i).get2(0, emission.x, emission.y);
+    PhotonState p = start(replica, i, emission, 0, events);
     for (bool alive = true; alive;) {
         log.ray(p.origin, p.dir, 1e-6, 1e30, false);
         alive = step(p, tracer->intersect(p.origin, p.dir), events, acc, shadows);
@@ -186,7 +191,7 @@ void Transport::deposit_camera(const Hit& hit, std::size_t index, const glm::dve
     // E_pixel += w / A_pix with A_pix = omega d^2 / cos; stored relative to the pixel's own G-buffer
     // footprint so the fixed-point value stays near q. Added if the pinhole sees the point.
     const double x = w * pixel.scale * cos_c / (dist * dist);
-    shadows.push_back({{hit.position, to_camera, 0.0, dist * (1.0 - 1e-6)}, &acc.pixels[acc.pixel_offset + index],
+    shadows.push_back({{hit.position, to_camera, 0.0, dist * (1.0 - 1e-6)}, &acc.pixels[index],
                        to_fixed(x), false});
 }
 

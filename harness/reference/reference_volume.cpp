@@ -75,7 +75,7 @@ void Transport::scatter_to_camera(const glm::dvec3& origin, const glm::dvec3& di
                          volume_scale[k] / r2;
     const double fixed = std::min(value * kFixedScale + 0.5, 0x1.0p62);
     // Added if the pinhole sees the point.
-    shadows.push_back({{x, to_camera, 0.0, r * (1.0 - 1e-6)}, &acc.volume[acc.volume_offset + k],
+    shadows.push_back({{x, to_camera, 0.0, r * (1.0 - 1e-6)}, &acc.volume[k],
                        static_cast<std::int64_t>(fixed), true});
 }
 

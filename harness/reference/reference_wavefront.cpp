@@ -23,15 +23,17 @@ constexpr std::size_t kWave = 512;
 
 }  // namespace
 
-void Transport::trace_wave(std::uint32_t replica, std::uint64_t first, const std::uint32_t* order, std::size_t n,
-                           FluxLedger& ledger, Accumulators& acc, WaveScratch& s) const {
+void Transport::trace_wave(std::uint32_t replica, std::uint64_t first, const std::uint32_t* order,
+                           const glm::dvec2* emission, std::size_t n, FluxLedger& ledger, Accumulators& acc,
+                           WaveScratch& s) const {
     for (std::size_t w0 = 0; w0 < n; w0 += kWave) {
         const std::size_t count = std::min(kWave, n - w0);
         s.events.clear();
         s.photons.resize(count);
         s.active.resize(count);
         for (std::size_t k = 0; k < count; ++k) {
-            s.photons[k] = start(replica, first + order[w0 + k], static_cast<std::uint32_t>(k), s.events);
+            const std::uint32_t offset = order[w0 + k];
+            s.photons[k] = start(replica, first + offset, emission[offset], static_cast<std::uint32_t>(k), s.events);
             s.active[k] = static_cast<std::uint32_t>(k);
         }
         while (!s.active.empty()) {
