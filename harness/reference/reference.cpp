@@ -20,7 +20,8 @@
 // failure (exit 1). reference_cache.cpp never stores or serves an empty entry either.
 //
 // The photon's path is in reference_transport.cpp, media and the camera_volume view in
-// reference_volume.cpp. Bump kReferenceVersion (reference_cache.cpp) whenever the transport or the
+// reference_volume.cpp, the waves that trace a chunk's photons together (packet queries) in
+// reference_wavefront.cpp. Bump kReferenceVersion (reference_cache.cpp) whenever the transport or the
 // estimators change.
 #include <caustics/reference/reference.hpp>
 
@@ -317,7 +318,7 @@ ReferenceResult compute_reference(const RayTracer& tracer, const ReceiverChart& 
     if (settings.replicas < 2 || settings.replicas > ReferenceSettings::kMaxReplicas)
         throw std::runtime_error("reference: replicas must be in [2, " + std::to_string(ReferenceSettings::kMaxReplicas) + "]");
     const bool camera_view = camera != nullptr && settings.camera_view;
-    // The sums, one copy per worker thread, and the images against the memory ceiling before any of
+    // The sums and the images against the memory ceiling before any of
     // them is allocated (limits.hpp; the scene loader checked the default replicas already).
     check_scene_memory(scene, settings.replicas, worker_threads());
 
