@@ -1,15 +1,24 @@
-// Reference throughput on scenes/pool.json frame 0 (issue 2, "Benchmarks"). BM_ReferenceVsEmbree/camera:{0,1}:
-//   photons_per_s       compute_reference (without / with the camera view)
-//   embree_rays_per_s   the same photons' rays (recorded once, outside the timed loop) replayed through
-//                       bare rtcIntersect1 / rtcOccluded1 on the same threads, right after each run
-//   ratio               replay time / reference time for the same photons: the share of the
-//                       reference's time spent in ray queries. Goal >= 0.8 (bookkeeping <= 25 %).
+// Reference throughput against raw Embree on the same rays (issue 18, item 2).
+// BM_ReferenceVsEmbree/scene:{0 pool, 1 sphere, 2 bunny, 3 sphere_fog}/camera:{0,1}, frame 0 of each:
+//   photons_per_s       compute_reference (without / with the camera view), default sampler (scrambled Sobol')
+//   embree_*_s          the same photons' rays (recorded once, outside the timed loop) replayed through bare
+//                       Embree on the same threads, right after each reference run, in each query mode:
+//                         single   rtcIntersect1 / rtcOccluded1 in the order the reference cast them
+//                         grouped  the same single-ray queries, each block's rays grouped by their place in
+//                                  the photon's path (all emitted rays, then all second rays, ...)
+//                         stream   rtcIntersect1M / rtcOccluded1M over those groups, COHERENT context
+//                         packet8 / packet16  rtcIntersect8/16 / rtcOccluded8/16 over those groups, COHERENT
+//   anchor_mode         the fastest of these modes (0 single ... 4 packet16): the anchor
+//   ratio               anchor replay time / reference time for the same photons. Goal >= 0.8.
+//   ratio_single        single replay time / reference time (the share of the reference's time spent in
+//                       the ray queries it actually makes)
+// BM_Reference/scene/camera: compute_reference alone (for profiles: perf record -g ... --benchmark_filter=BM_Reference/).
 //
 //   build/release/bench/bench_reference [--benchmark_filter=...]
 //   CAUSTICS_BENCH_PHOTONS=N  photons per iteration (default 1e6)
-#include <atomic>
+#include <algorithm>
+#include <array>
 #include <chrono>
-#include <cstdio>
 #include <cstdlib>
 #include <map>
 #include <memory>
@@ -34,28 +43,34 @@ using namespace caustics;
 
 namespace {
 
+constexpr std::array<const char*, 4> kScenes = {"pool", "sphere", "bunny", "sphere_fog"};
+constexpr std::size_t kBlock = 4096;   // rays per replay task (and per grouping block)
+
 std::uint64_t photons_per_iteration() {
     const char* env = std::getenv("CAUSTICS_BENCH_PHOTONS");
     return env ? std::strtoull(env, nullptr, 10) : 1'000'000ull;
 }
 
-// pool.json frame 0, built once per process (outside every timed region).
-struct PoolScene {
+// One scene's frame 0, built once per process (outside every timed region).
+struct BenchScene {
     Scene scene;
     std::unique_ptr<FrameGeometry> frame;
     std::unique_ptr<RayTracer> tracer;
     std::unique_ptr<ReceiverChart> chart;
     CameraGBuffer gbuffer;
 
-    PoolScene() : scene(load_scene(std::string(CAUSTICS_SOURCE_DIR) + "/scenes/pool.json")) {
+    explicit BenchScene(const std::string& name)
+        : scene(load_scene(std::string(CAUSTICS_SOURCE_DIR) + "/scenes/" + name + ".json")) {
         frame = std::make_unique<FrameGeometry>(build_frame_geometry(scene, 0));
         tracer = std::make_unique<RayTracer>(*frame);
         chart = std::make_unique<ReceiverChart>(*frame, scene.receiver.width, scene.receiver.height);
         gbuffer = build_camera_gbuffer(*tracer, scene.camera);
     }
-    static PoolScene& get() {
-        static PoolScene pool;
-        return pool;
+    static BenchScene& get(std::size_t index) {
+        static std::map<std::size_t, std::unique_ptr<BenchScene>> scenes;
+        auto& s = scenes[index];
+        if (!s) s = std::make_unique<BenchScene>(kScenes.at(index));
+        return *s;
     }
 };
 
@@ -67,29 +82,113 @@ ReferenceSettings settings_for(bool camera) {
     return s;
 }
 
-// Replays recorded rays through bare rtcIntersect1 / rtcOccluded1 on all threads; returns seconds.
-double replay(RTCScene scene, const std::vector<RecordedRay>& rays) {
+RTCRay to_ray(const RecordedRay& r) {
+    return {r.origin[0], r.origin[1], r.origin[2], r.tnear, r.dir[0], r.dir[1], r.dir[2], 0.0f, r.tfar, 0xFFFFFFFFu, 0u, 0u};
+}
+
+RTCRayHit to_rayhit(const RecordedRay& r) {
+    RTCRayHit rh;
+    rh.ray = to_ray(r);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    return rh;
+}
+
+// Each block of kBlock rays, its shadow rays after its closest-hit rays, each kind ordered by the ray's
+// place in its photon's path (stable: photons keep the batch's coherent order within a group).
+std::vector<RecordedRay> grouped(const std::vector<RecordedRay>& rays) {
+    std::vector<RecordedRay> out(rays);
+    for (std::size_t b = 0; b < out.size(); b += kBlock)
+        std::stable_sort(out.begin() + b, out.begin() + std::min(out.size(), b + kBlock),
+                         [](const RecordedRay& x, const RecordedRay& y) {
+                             return x.shadow != y.shadow ? y.shadow : x.segment < y.segment;
+                         });
+    return out;
+}
+
+enum Mode { kSingle, kGrouped, kStream, kPacket8, kPacket16, kModes };
+
+// Packets of W rays from rays[i, i + n), n <= W, all of one kind.
+template <int W, class RayHitW, class RayW>
+std::size_t packet(RTCScene scene, RTCIntersectContext* context, const RecordedRay* rays, int n) {
+    alignas(64) int valid[W];
+    if (rays[0].shadow) {
+        alignas(64) RayW p;
+        for (int k = 0; k < W; ++k) {
+            const RecordedRay& r = rays[k < n ? k : 0];
+            valid[k] = k < n ? -1 : 0;
+            p.org_x[k] = r.origin[0], p.org_y[k] = r.origin[1], p.org_z[k] = r.origin[2], p.tnear[k] = r.tnear;
+            p.dir_x[k] = r.dir[0], p.dir_y[k] = r.dir[1], p.dir_z[k] = r.dir[2], p.time[k] = 0.0f, p.tfar[k] = r.tfar;
+            p.mask[k] = 0xFFFFFFFFu, p.id[k] = 0u, p.flags[k] = 0u;
+        }
+        if constexpr (W == 8) rtcOccluded8(valid, scene, context, &p);
+        else rtcOccluded16(valid, scene, context, &p);
+        std::size_t count = 0;
+        for (int k = 0; k < n; ++k) count += p.tfar[k] < 0.0f ? 1 : 0;
+        return count;
+    }
+    alignas(64) RayHitW p;
+    for (int k = 0; k < W; ++k) {
+        const RecordedRay& r = rays[k < n ? k : 0];
+        valid[k] = k < n ? -1 : 0;
+        p.ray.org_x[k] = r.origin[0], p.ray.org_y[k] = r.origin[1], p.ray.org_z[k] = r.origin[2], p.ray.tnear[k] = r.tnear;
+        p.ray.dir_x[k] = r.dir[0], p.ray.dir_y[k] = r.dir[1], p.ray.dir_z[k] = r.dir[2], p.ray.time[k] = 0.0f;
+        p.ray.tfar[k] = r.tfar, p.ray.mask[k] = 0xFFFFFFFFu, p.ray.id[k] = 0u, p.ray.flags[k] = 0u;
+        p.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID, p.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+    }
+    if constexpr (W == 8) rtcIntersect8(valid, scene, context, &p);
+    else rtcIntersect16(valid, scene, context, &p);
+    std::size_t count = 0;
+    for (int k = 0; k < n; ++k) count += p.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID ? 1 : 0;
+    return count;
+}
+
+// Replays rays (`mode`: see the file comment; modes past kSingle expect grouped() rays) on all threads;
+// returns seconds. The query structs are filled inside the timed region in every mode alike.
+double replay(RTCScene scene, const std::vector<RecordedRay>& rays, Mode mode) {
     const auto start = std::chrono::steady_clock::now();
+    const std::size_t blocks = (rays.size() + kBlock - 1) / kBlock;
     const std::size_t hits = tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, rays.size(), 4096), std::size_t{0},
+        tbb::blocked_range<std::size_t>(0, blocks, 1), std::size_t{0},
         [&](const tbb::blocked_range<std::size_t>& range, std::size_t count) {
             RTCIntersectContext context;
             rtcInitIntersectContext(&context);
-            for (std::size_t i = range.begin(); i < range.end(); ++i) {
-                const RecordedRay& r = rays[i];
-                if (r.shadow) {
-                    RTCRay ray{r.origin[0], r.origin[1], r.origin[2], r.tnear, r.dir[0], r.dir[1], r.dir[2],
-                               0.0f, r.tfar, 0xFFFFFFFFu, 0u, 0u};
-                    rtcOccluded1(scene, &context, &ray);
-                    count += ray.tfar < 0.0f ? 1 : 0;
+            if (mode >= kStream) context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+            std::vector<RTCRayHit> hit_stream;
+            std::vector<RTCRay> shadow_stream;
+            for (std::size_t b = range.begin(); b < range.end(); ++b) {
+                const std::size_t first = b * kBlock, last = std::min(rays.size(), first + kBlock);
+                if (mode <= kGrouped) {
+                    for (std::size_t i = first; i < last; ++i) {
+                        const RecordedRay& r = rays[i];
+                        if (r.shadow) {
+                            RTCRay ray = to_ray(r);
+                            rtcOccluded1(scene, &context, &ray);
+                            count += ray.tfar < 0.0f ? 1 : 0;
+                        } else {
+                            RTCRayHit rh = to_rayhit(r);
+                            rtcIntersect1(scene, &context, &rh);
+                            count += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID ? 1 : 0;
+                        }
+                    }
+                } else if (mode == kStream) {
+                    hit_stream.clear(), shadow_stream.clear();
+                    for (std::size_t i = first; i < last; ++i)
+                        if (rays[i].shadow) shadow_stream.push_back(to_ray(rays[i]));
+                        else hit_stream.push_back(to_rayhit(rays[i]));
+                    rtcIntersect1M(scene, &context, hit_stream.data(), static_cast<unsigned>(hit_stream.size()), sizeof(RTCRayHit));
+                    rtcOccluded1M(scene, &context, shadow_stream.data(), static_cast<unsigned>(shadow_stream.size()), sizeof(RTCRay));
+                    for (const RTCRayHit& rh : hit_stream) count += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID ? 1 : 0;
+                    for (const RTCRay& r : shadow_stream) count += r.tfar < 0.0f ? 1 : 0;
                 } else {
-                    RTCRayHit rh;
-                    rh.ray = {r.origin[0], r.origin[1], r.origin[2], r.tnear, r.dir[0], r.dir[1], r.dir[2],
-                              0.0f, r.tfar, 0xFFFFFFFFu, 0u, 0u};
-                    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-                    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-                    rtcIntersect1(scene, &context, &rh);
-                    count += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID ? 1 : 0;
+                    const int width = mode == kPacket8 ? 8 : 16;
+                    for (std::size_t i = first; i < last;) {
+                        int n = 1;
+                        while (n < width && i + n < last && rays[i + n].shadow == rays[i].shadow) ++n;
+                        count += width == 8 ? packet<8, RTCRayHit8, RTCRay8>(scene, &context, &rays[i], n)
+                                            : packet<16, RTCRayHit16, RTCRay16>(scene, &context, &rays[i], n);
+                        i += static_cast<std::size_t>(n);
+                    }
                 }
             }
             return count;
@@ -99,45 +198,76 @@ double replay(RTCScene scene, const std::vector<RecordedRay>& rays) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-// Each iteration runs the reference and then replays its rays, back to back, so that both see the same
-// machine conditions; the reported time is the reference's.
+// Each iteration runs the reference and then replays its rays in every mode, back to back, so that all
+// see the same machine conditions; the reported time is the reference's.
 void BM_ReferenceVsEmbree(benchmark::State& state) {
-    const bool camera = state.range(0) != 0;
-    PoolScene& pool = PoolScene::get();
+    BenchScene& bs = BenchScene::get(static_cast<std::size_t>(state.range(0)));
+    const bool camera = state.range(1) != 0;
     const ReferenceSettings settings = settings_for(camera);
-    const CameraGBuffer* gbuffer = camera ? &pool.gbuffer : nullptr;
-    const std::vector<RecordedRay> rays = record_reference_rays(*pool.tracer, *pool.chart, gbuffer, settings);
-    auto* scene = static_cast<RTCScene>(pool.tracer->embree_scene());
+    const CameraGBuffer* gbuffer = camera ? &bs.gbuffer : nullptr;
+    const std::vector<RecordedRay> rays = record_reference_rays(*bs.tracer, *bs.chart, gbuffer, settings);
+    const std::vector<RecordedRay> by_segment = grouped(rays);
+    auto* scene = static_cast<RTCScene>(bs.tracer->embree_scene());
     std::size_t shadow_rays = 0;
     for (const RecordedRay& r : rays) shadow_rays += r.shadow ? 1 : 0;
 
-    double reference_s = 0.0, replay_s = 0.0;
+    double reference_s = 0.0;
+    std::array<double, kModes> replay_s{};
     ReferenceResult last;
     for (auto _ : state) {
+        last = ReferenceResult{};   // the previous result's memory is freed outside the timed region
         const auto start = std::chrono::steady_clock::now();
-        last = compute_reference(*pool.tracer, *pool.chart, gbuffer, settings);
+        last = compute_reference(*bs.tracer, *bs.chart, gbuffer, settings);
         const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         reference_s += t;
         state.SetIterationTime(t);
         state.PauseTiming();
-        replay_s += replay(scene, rays);
+        for (int m = 0; m < kModes; ++m)
+            replay_s[m] += replay(scene, m == kSingle ? rays : by_segment, static_cast<Mode>(m));
         state.ResumeTiming();
     }
     const double n = static_cast<double>(state.iterations());
     const double photons = static_cast<double>(settings.photons) * n;
+    const int anchor = static_cast<int>(std::min_element(replay_s.begin(), replay_s.end()) - replay_s.begin());
+    const char* names[kModes] = {"single", "grouped", "stream", "packet8", "packet16"};
+    for (int m = 0; m < kModes; ++m)
+        state.counters[std::string("embree_") + names[m] + "_rays_per_s"] = rays.size() * n / replay_s[m];
     state.counters["photons_per_s"] = photons / reference_s;
-    state.counters["embree_rays_per_s"] = rays.size() * n / replay_s;
     state.counters["reference_rays_per_s"] = rays.size() * n / reference_s;
-    state.counters["ratio"] = replay_s / reference_s;   // share of the reference's time in ray queries
+    state.counters["anchor_mode"] = anchor;
+    state.counters["ratio"] = replay_s[anchor] / reference_s;
+    state.counters["ratio_single"] = replay_s[kSingle] / reference_s;
     state.counters["rays_per_photon"] = static_cast<double>(rays.size()) / settings.photons;
     state.counters["shadow_rays_per_photon"] = static_cast<double>(shadow_rays) / settings.photons;
-    state.counters["s_per_1e8_photons"] = 1e8 * reference_s / photons;
     state.counters["threads"] = tbb::info::default_concurrency();
     state.counters["noise_nrmse"] = last.noise_nrmse;
+    state.SetLabel(kScenes.at(static_cast<std::size_t>(state.range(0))));
+}
+
+void BM_Reference(benchmark::State& state) {
+    BenchScene& bs = BenchScene::get(static_cast<std::size_t>(state.range(0)));
+    const bool camera = state.range(1) != 0;
+    const ReferenceSettings settings = settings_for(camera);
+    for (auto _ : state)
+        benchmark::DoNotOptimize(compute_reference(*bs.tracer, *bs.chart, camera ? &bs.gbuffer : nullptr, settings));
+    state.counters["photons_per_s"] = benchmark::Counter(static_cast<double>(settings.photons) * state.iterations(),
+                                                         benchmark::Counter::kIsRate);
+    state.SetLabel(kScenes.at(static_cast<std::size_t>(state.range(0))));
 }
 
 }  // namespace
 
-BENCHMARK(BM_ReferenceVsEmbree)->ArgName("camera")->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseManualTime()->Iterations(5);
+BENCHMARK(BM_ReferenceVsEmbree)
+    ->ArgNames({"scene", "camera"})
+    ->ArgsProduct({{0, 1, 2, 3}, {0, 1}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseManualTime()
+    ->Iterations(5);
+BENCHMARK(BM_Reference)
+    ->ArgNames({"scene", "camera"})
+    ->ArgsProduct({{0, 1, 2, 3}, {0, 1}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(5);
 
 BENCHMARK_MAIN();

@@ -3,6 +3,7 @@
 // Triangles for planes, boxes, meshes and height fields; Embree sphere points for analytic spheres.
 // Shading normals are interpolated (height fields: from the field's gradients) and face the same
 // side as the geometric normal's outward orientation.
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 
@@ -21,6 +22,14 @@ struct Hit {
     glm::dvec3 shading_normal{0.0};    // unit, outward, interpolated
 };
 
+// One query of a batch: origin + t dir, t in (tmin, tmax).
+struct RayQuery {
+    glm::dvec3 origin{0.0};
+    glm::dvec3 dir{0.0, 0.0, 1.0};
+    double tmin = 1e-6;
+    double tmax = 1e30;
+};
+
 class RayTracer {
 public:
     explicit RayTracer(const FrameGeometry& frame);
@@ -33,6 +42,13 @@ public:
                   double tmax = 1e30) const;
     // True if anything lies on the open segment. Thread-safe.
     bool occluded(const glm::dvec3& origin, const glm::dvec3& dir, double tmin, double tmax) const;
+
+    // Batches of n queries, traced as Embree ray packets of 16 with a coherent context: much faster
+    // than one query at a time where consecutive queries are coherent (the reference's photon batches).
+    // hits[k] / occluded[k] are what the single-ray forms return for queries[k], bit for bit
+    // (tests/test_reference_bits.cpp). Thread-safe.
+    void intersect(const RayQuery* queries, std::size_t n, Hit* hits) const;
+    void occluded(const RayQuery* queries, std::size_t n, std::uint8_t* occluded) const;
 
     const FrameGeometry& frame() const { return *frame_; }
 

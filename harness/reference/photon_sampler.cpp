@@ -3,12 +3,12 @@
 namespace caustics {
 namespace {
 
-std::uint32_t reverse_bits(std::uint32_t x) {
-    x = ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
-    x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
+constexpr std::uint32_t reverse_bits(std::uint32_t x) {
+    // Bytes by one byte swap, then the bits within each byte.
+    x = __builtin_bswap32(x);
     x = ((x >> 4) & 0x0F0F0F0Fu) | ((x & 0x0F0F0F0Fu) << 4);
-    x = ((x >> 8) & 0x00FF00FFu) | ((x & 0x00FF00FFu) << 8);
-    return (x >> 16) | (x << 16);
+    x = ((x >> 2) & 0x33333333u) | ((x & 0x33333333u) << 2);
+    return ((x >> 1) & 0x55555555u) | ((x & 0x55555555u) << 1);
 }
 
 // A Laine-Karras style hash: each step only propagates lower bits into higher ones (x ^= x * even,
@@ -26,6 +26,40 @@ std::uint32_t lk_hash(std::uint32_t x, std::uint32_t seed) {
 
 constexpr double kTo01 = 0x1.0p-32;
 
+constexpr std::uint32_t sobol_dim1_loop(std::uint32_t index) {
+    // Direction numbers v_k = v_{k-1} ^ (v_{k-1} >> 1), v_0 = 2^31 (Sobol' 1967; Joe and Kuo's second
+    // dimension).
+    std::uint32_t x = 0, v = 0x80000000u;
+    for (; index; index >>= 1, v ^= v >> 1)
+        if (index & 1u) x ^= v;
+    return x;
+}
+
+// x -> reverse_bits(sobol_dim1(reverse_bits(x))) is linear over GF(2) (a composition of linear maps),
+// so it is the XOR of one table entry per byte of x: four look-ups instead of a 32-step loop and two
+// bit reversals, the same bits.
+struct Dim1Tables {
+    std::uint32_t t[4][256];
+};
+
+constexpr Dim1Tables make_dim1_tables() {
+    Dim1Tables tables{};
+    for (int byte = 0; byte < 4; ++byte)
+        for (std::uint32_t v = 0; v < 256; ++v) {
+            std::uint32_t x = 0;
+            for (int bit = 0; bit < 8; ++bit)
+                if (v & (1u << bit)) x ^= reverse_bits(sobol_dim1_loop(reverse_bits(1u << (8 * byte + bit))));
+            tables.t[byte][v] = x;
+        }
+    return tables;
+}
+
+constexpr Dim1Tables kDim1 = make_dim1_tables();
+
+std::uint32_t reversed_dim1_of_reversed(std::uint32_t x) {
+    return kDim1.t[0][x & 0xFFu] ^ kDim1.t[1][(x >> 8) & 0xFFu] ^ kDim1.t[2][(x >> 16) & 0xFFu] ^ kDim1.t[3][x >> 24];
+}
+
 }  // namespace
 
 const char* sampler_name(SamplerKind kind) { return kind == SamplerKind::Sobol ? "sobol" : "independent"; }
@@ -40,25 +74,39 @@ std::uint32_t owen_scramble(std::uint32_t x, std::uint32_t seed) {
     return reverse_bits(lk_hash(reverse_bits(x), seed));
 }
 
-std::uint32_t sobol_dim1(std::uint32_t index) {
-    // Direction numbers v_k = v_{k-1} ^ (v_{k-1} >> 1), v_0 = 2^31 (Sobol' 1967; Joe and Kuo's second
-    // dimension).
-    std::uint32_t x = 0, v = 0x80000000u;
-    for (; index; index >>= 1, v ^= v >> 1)
-        if (index & 1u) x ^= v;
-    return x;
+std::uint32_t sobol_dim1(std::uint32_t index) { return sobol_dim1_loop(index); }
+
+// With owen_scramble(x, s) = R(H(R(x), s)) (R: reverse_bits, H: lk_hash) and the shuffled index
+// R(h), h = H(R(index), s1): the even dimension's point R(R(h)) = h scrambles to R(H(R(h), s2)), the odd
+// one's sobol_dim1(R(h)) to R(H(R(sobol_dim1(R(h))), s2')). Both come from the same h: one hash of
+// the index per pair, the same bits as scrambling each dimension on its own (tests/test_reference_bits.cpp).
+void PhotonSampler::quasi_pair(int pair, std::uint32_t& even, std::uint32_t& odd) const {
+    const std::uint64_t pair_seed = mix64(replica_seed_ + static_cast<std::uint64_t>(pair) * 0xA24BAED4963EE407ull);
+    const std::uint32_t h = lk_hash(reverse_bits(static_cast<std::uint32_t>(index_)), static_cast<std::uint32_t>(pair_seed));
+    const std::uint32_t seed2 = static_cast<std::uint32_t>(pair_seed >> 32);
+    even = reverse_bits(lk_hash(reverse_bits(h), seed2));
+    odd = reverse_bits(lk_hash(reversed_dim1_of_reversed(h), seed2 ^ 0x68bc21ebu));
 }
 
 double PhotonSampler::get(int dim) const {
     if (kind_ == SamplerKind::Independent || dim >= kQuasiDimensions || index_ > 0xFFFFFFFFull) return random(dim);
-    const int pair = dim >> 1;
-    const std::uint64_t pair_seed = mix64(replica_seed_ + static_cast<std::uint64_t>(pair) * 0xA24BAED4963EE407ull);
-    // Shuffled index (Burley's "padding"): a nested scramble of the index's digits.
-    const std::uint32_t index = owen_scramble(static_cast<std::uint32_t>(index_), static_cast<std::uint32_t>(pair_seed));
-    const std::uint32_t raw = (dim & 1) ? sobol_dim1(index) : reverse_bits(index);
-    const std::uint32_t scrambled = owen_scramble(raw, static_cast<std::uint32_t>(pair_seed >> 32) ^ (dim & 1 ? 0x68bc21ebu : 0u));
+    // Dimensions are taken in pairs, each pair reading its own shuffled (Owen-scrambled) index (Burley's
+    // "padding"); the pair is the (0,2)-sequence (van der Corput, sobol_dim1), Owen-scrambled.
+    std::uint32_t even, odd;
+    quasi_pair(dim >> 1, even, odd);
     // Centre of the 2^-32 cell: never exactly 0 or 1.
-    return (static_cast<double>(scrambled) + 0.5) * kTo01;
+    return (static_cast<double>(dim & 1 ? odd : even) + 0.5) * kTo01;
+}
+
+void PhotonSampler::get2(int dim, double& first, double& second) const {
+    if (kind_ == SamplerKind::Independent || dim + 1 >= kQuasiDimensions || index_ > 0xFFFFFFFFull || (dim & 1)) {
+        first = get(dim), second = get(dim + 1);
+        return;
+    }
+    std::uint32_t even, odd;
+    quasi_pair(dim >> 1, even, odd);
+    first = (static_cast<double>(even) + 0.5) * kTo01;
+    second = (static_cast<double>(odd) + 0.5) * kTo01;
 }
 
 }  // namespace caustics

@@ -33,19 +33,25 @@ constexpr int kQuasiDimensions = 16;
 
 class PhotonSampler {
 public:
+    PhotonSampler() = default;
     PhotonSampler(SamplerKind kind, std::uint64_t seed, std::uint32_t replica, std::uint64_t index)
         : kind_(kind), replica_seed_(mix64(seed * 0x9E3779B97F4A7C15ull + replica + 1)), index_(index) {}
     // The value of dimension `dim` (each dimension may be read any number of times).
     double get(int dim) const;
+    // Dimensions dim and dim + 1 at once (the same values as two get calls; one index hash when they
+    // form a pair).
+    void get2(int dim, double& first, double& second) const;
 
 private:
+    // The scrambled 32-bit points of both dimensions of a pair.
+    void quasi_pair(int pair, std::uint32_t& even, std::uint32_t& odd) const;
     double random(int dim) const {
         const std::uint64_t h = mix64(mix64(replica_seed_ + index_ * 0xD1B54A32D192ED03ull) + (dim + 1) * 0x9E3779B97F4A7C15ull);
         return static_cast<double>(h >> 11) * 0x1.0p-53;
     }
-    SamplerKind kind_;
-    std::uint64_t replica_seed_;
-    std::uint64_t index_;
+    SamplerKind kind_ = SamplerKind::Sobol;
+    std::uint64_t replica_seed_ = 0;
+    std::uint64_t index_ = 0;
 };
 
 // Owen scrambling of a 32-bit base-2 fraction (bit 31 is the first digit), seeded; a bijection that

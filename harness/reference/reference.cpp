@@ -20,7 +20,8 @@
 // failure (exit 1). reference_cache.cpp never stores or serves an empty entry either.
 //
 // The photon's path is in reference_transport.cpp, media and the camera_volume view in
-// reference_volume.cpp. Bump kReferenceVersion (reference_cache.cpp) whenever the transport or the
+// reference_volume.cpp, the waves that trace a chunk's photons together (packet queries) in
+// reference_wavefront.cpp. Bump kReferenceVersion (reference_cache.cpp) whenever the transport or the
 // estimators change.
 #include <caustics/reference/reference.hpp>
 
@@ -60,10 +61,10 @@ constexpr std::size_t kChunkSize = 2048;
 
 using detail::Accumulators;
 using detail::kFixedScale;
-using detail::NoRayLog;
 using detail::PixelInfo;
 using detail::RayRecorder;
 using detail::Transport;
+using detail::WaveScratch;
 
 void add_ledger(FluxLedger& sum, const FluxLedger& l) {
     sum.emitted += l.emitted;
@@ -142,13 +143,7 @@ void trace_photons(const Transport& transport, ReferenceSums& sums, std::uint64_
                    ProgressBar& progress) {
     const std::size_t bins = sums.bins, pixels = sums.pixels, volume_pixels = sums.volume_pixels;
     const std::uint32_t replicas = sums.replicas;
-    tbb::enumerable_thread_specific<Accumulators> accumulators([&] {
-        Accumulators a;
-        a.bins.assign(bins * replicas, 0);
-        a.pixels.assign(pixels * replicas, 0);
-        a.volume.assign(volume_pixels * replicas, 0);
-        return a;
-    });
+    tbb::enumerable_thread_specific<WaveScratch> waves;
     const std::uint64_t per_replica_batches = (to - from + kBatchSize - 1) / kBatchSize;
     const std::uint64_t batches = per_replica_batches * replicas;
     std::vector<FluxLedger> batch_ledgers(batches);
@@ -159,20 +154,20 @@ void trace_photons(const Transport& transport, ReferenceSums& sums, std::uint64_
             const std::uint64_t last = std::min(to, first + kBatchSize);
             // Per batch, not per thread: a thread waiting on the chunks below may start another batch.
             std::vector<std::uint32_t> order, scratch;
-            transport.batch_order(replica, first, last, order, scratch);
+            std::vector<glm::dvec2> emission;
+            transport.batch_order(replica, first, last, order, scratch, emission);
             const std::size_t chunks = (order.size() + kChunkSize - 1) / kChunkSize;
             std::vector<FluxLedger> chunk_ledgers(chunks);
             tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, 1), [&](const tbb::blocked_range<std::size_t>& cr) {
-                Accumulators& acc = accumulators.local();
-                acc.bin_offset = replica * bins;
-                acc.pixel_offset = replica * pixels;
-                acc.volume_offset = replica * volume_pixels;
-                NoRayLog log;
+                Accumulators acc;
+                acc.bins = sums.bin_sums.data() + replica * bins;
+                acc.pixels = pixels ? sums.pixel_sums.data() + replica * pixels : nullptr;
+                acc.volume = volume_pixels ? sums.volume_sums.data() + replica * volume_pixels : nullptr;
+                WaveScratch& wave = waves.local();
                 for (std::size_t c = cr.begin(); c < cr.end(); ++c) {
                     FluxLedger ledger;
-                    const std::size_t end = std::min(order.size(), (c + 1) * kChunkSize);
-                    for (std::size_t j = c * kChunkSize; j < end; ++j)
-                        transport.trace(replica, first + order[j], ledger, acc, log);
+                    const std::size_t begin = c * kChunkSize, end = std::min(order.size(), begin + kChunkSize);
+                    transport.trace_wave(replica, first, order.data() + begin, emission.data(), end - begin, ledger, acc, wave);
                     chunk_ledgers[c] = ledger;
                 }
             });
@@ -183,12 +178,6 @@ void trace_photons(const Transport& transport, ReferenceSums& sums, std::uint64_
         }
     });
     for (const FluxLedger& l : batch_ledgers) add_ledger(sums.ledger_units, l);
-    // Integer sums are exact, so combining the threads' accumulators in any order gives the same bits.
-    for (const Accumulators& a : accumulators) {
-        for (std::size_t i = 0; i < a.bins.size(); ++i) sums.bin_sums[i] += a.bins[i];
-        for (std::size_t i = 0; i < a.pixels.size(); ++i) sums.pixel_sums[i] += a.pixels[i];
-        for (std::size_t i = 0; i < a.volume.size(); ++i) detail::add_saturating(sums.volume_sums[i], a.volume[i]);
-    }
     sums.per_replica = to;
 }
 
@@ -201,21 +190,29 @@ void estimate_view(const std::vector<std::int64_t>& sums, std::size_t count, std
     stderr_image = Image(width, height, 1);
     per_replica.assign(replicas, Image(width, height, 1));
     const double r = replicas;
-    for (std::size_t k = 0; k < count; ++k) {
-        const double a = area(k);
-        if (!(a > 0.0)) continue;
-        double sum = 0.0, sq = 0.0;
-        for (std::uint32_t rep = 0; rep < replicas; ++rep) {
-            const double e = static_cast<double>(sums[rep * count + k]) / kFixedScale * unit / a;
-            per_replica[rep].pixels[k] = static_cast<float>(e);
-            sum += e;
-            sq += e * e;
+    // Pixels in parallel (each is its own computation: the same bits for any thread count). A pixel no
+    // replica deposited in keeps its zeros without its measure being computed (four atan per camera
+    // pixel: most of a 1024 x 768 view is dark).
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 4096), [&](const tbb::blocked_range<std::size_t>& range) {
+        for (std::size_t k = range.begin(); k < range.end(); ++k) {
+            bool any = false;
+            for (std::uint32_t rep = 0; rep < replicas && !any; ++rep) any = sums[rep * count + k] != 0;
+            if (!any) continue;
+            const double a = area(k);
+            if (!(a > 0.0)) continue;
+            double sum = 0.0, sq = 0.0;
+            for (std::uint32_t rep = 0; rep < replicas; ++rep) {
+                const double e = static_cast<double>(sums[rep * count + k]) / kFixedScale * unit / a;
+                per_replica[rep].pixels[k] = static_cast<float>(e);
+                sum += e;
+                sq += e * e;
+            }
+            const double m = sum / r;
+            const double var = replicas > 1 ? std::max(0.0, (sq - r * m * m) / (r - 1.0)) / r : 0.0;
+            mean.pixels[k] = static_cast<float>(m);
+            stderr_image.pixels[k] = static_cast<float>(std::sqrt(var));
         }
-        const double m = sum / r;
-        const double var = replicas > 1 ? std::max(0.0, (sq - r * m * m) / (r - 1.0)) / r : 0.0;
-        mean.pixels[k] = static_cast<float>(m);
-        stderr_image.pixels[k] = static_cast<float>(std::sqrt(var));
-    }
+    });
 }
 
 ReferenceResult finish_reference(const Transport& transport, const ReceiverChart& chart, const CameraGBuffer* camera,
@@ -321,7 +318,7 @@ ReferenceResult compute_reference(const RayTracer& tracer, const ReceiverChart& 
     if (settings.replicas < 2 || settings.replicas > ReferenceSettings::kMaxReplicas)
         throw std::runtime_error("reference: replicas must be in [2, " + std::to_string(ReferenceSettings::kMaxReplicas) + "]");
     const bool camera_view = camera != nullptr && settings.camera_view;
-    // The sums, one copy per worker thread, and the images against the memory ceiling before any of
+    // The sums and the images against the memory ceiling before any of
     // them is allocated (limits.hpp; the scene loader checked the default replicas already).
     check_scene_memory(scene, settings.replicas, worker_threads());
 
@@ -432,24 +429,31 @@ std::vector<RecordedRay> record_reference_rays(const RayTracer& tracer, const Re
     std::unique_ptr<CameraModel> camera_model;
     const Transport transport = make_transport(tracer, chart, camera_view ? camera : nullptr, settings, camera_model);
     const std::uint32_t replicas = static_cast<std::uint32_t>(std::max(2, settings.replicas));
+    const std::size_t bins = static_cast<std::size_t>(chart.width()) * chart.height();
+    const std::size_t pixels = camera_view ? camera->covered.size() : 0;
+    std::vector<std::int64_t> bin_sums(bins * replicas, 0), pixel_sums(pixels * replicas, 0),
+        volume_sums(transport.volume ? pixels * replicas : 0, 0);
     Accumulators acc;
-    acc.bins.assign(static_cast<std::size_t>(chart.width()) * chart.height() * replicas, 0);
-    if (camera_view) acc.pixels.assign(camera->covered.size() * replicas, 0);
-    if (transport.volume) acc.volume.assign(camera->covered.size() * replicas, 0);
     RayRecorder recorder;
     recorder.offset = scene_ray_offset(tracer.frame());
     FluxLedger ledger;
     // The same batches and the same order within each batch as compute_reference.
     const std::uint64_t per = photons_per_replica(settings.photons, static_cast<int>(replicas), transport.emitters.size());
     std::vector<std::uint32_t> order, scratch;
+    std::vector<glm::dvec2> emission;
     for (std::uint32_t r = 0; r < replicas; ++r) {
-        acc.bin_offset = r * static_cast<std::size_t>(chart.width()) * chart.height();
-        acc.pixel_offset = camera_view ? r * camera->covered.size() : 0;
-        acc.volume_offset = transport.volume ? r * camera->covered.size() : 0;
+        acc.bins = bin_sums.data() + r * bins;
+        acc.pixels = camera_view ? pixel_sums.data() + r * pixels : nullptr;
+        acc.volume = transport.volume ? volume_sums.data() + r * pixels : nullptr;
         for (std::uint64_t first = 0; first < per; first += kBatchSize) {
             const std::uint64_t last = std::min(per, first + kBatchSize);
-            transport.batch_order(r, first, last, order, scratch);
-            for (const std::uint32_t i : order) transport.trace(r, first + i, ledger, acc, recorder);
+            transport.batch_order(r, first, last, order, scratch, emission);
+            for (const std::uint32_t i : order) {
+                const std::size_t before = recorder.rays.size();
+                transport.trace(r, first + i, ledger, acc, recorder);
+                for (std::size_t k = before; k < recorder.rays.size(); ++k)
+                    recorder.rays[k].segment = static_cast<std::uint8_t>(std::min<std::size_t>(k - before, 255));
+            }
         }
     }
     return std::move(recorder.rays);

@@ -17,10 +17,12 @@ struct RecordedRay {
     float tnear;
     float tfar;
     bool shadow;   // a visibility ray (rtcOccluded1) rather than a closest-hit query
+    std::uint8_t segment;   // the ray's place in its photon's sequence of queries (0: the emitted ray),
+                            // capped at 255: replays group a batch's rays by it (coherent streams)
 };
 
 // Traces photons [0, settings.photons) exactly as compute_reference does (same random numbers, same
-// paths; single thread) and returns every ray in the order cast.
+// paths; single thread) and returns every ray in the order cast, photon after photon.
 std::vector<RecordedRay> record_reference_rays(const RayTracer& tracer, const ReceiverChart& chart,
                                                const CameraGBuffer* camera, const ReferenceSettings& settings);
 

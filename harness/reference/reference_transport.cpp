@@ -28,123 +28,143 @@ double fresnel_reflectance(double cos_i, double cos_t, double n_i, double n_t) {
 }  // namespace
 
 void Transport::batch_order(std::uint32_t replica, std::uint64_t first, std::uint64_t last,
-                            std::vector<std::uint32_t>& order, std::vector<std::uint32_t>& scratch) const {
+                            std::vector<std::uint32_t>& order, std::vector<std::uint32_t>& scratch,
+                            std::vector<glm::dvec2>& emission) const {
+    emission.resize(static_cast<std::size_t>(last - first));
     photon_batch_order(
         emitters.size(), first, last,
         [&](std::uint64_t i, double& u1, double& u2) {
-            const PhotonSampler s = sampler_of(replica, i);
-            u1 = s.get(0), u2 = s.get(1);
+            sampler_of(replica, i).get2(0, u1, u2);
+            emission[static_cast<std::size_t>(i - first)] = {u1, u2};
         },
         order, scratch);
 }
 
-template <class Log>
-void Transport::trace(std::uint32_t replica, std::uint64_t i, FluxLedger& ledger, Accumulators& acc, Log& log) const {
-    const PhotonSampler rng = sampler_of(replica, i);
+PhotonState Transport::start(std::uint32_t replica, std::uint64_t i, const glm::dvec2& emission, std::uint32_t slot,
+                             std::vector<LedgerEvent>& ledger) const {
+    PhotonState p;
+    p.rng = sampler_of(replica, i);
     const std::size_t light = emitters.size() == 1 ? 0 : static_cast<std::size_t>(i % emitters.size());
-    const Emitter& emitter = emitters[light];
-    glm::dvec3 origin, dir;
-    emitter.sample(rng.get(0), rng.get(1), origin, dir);
-    const double u_dispersion = rng.get(2);
+    emitters[light].sample(emission.x, emission.y, p.origin, p.dir);
+    // Dimension 2 is the dispersion sample, read where a dispersive material is hit (step).
     // Dimensions 3, 4, ... in the order of use: each Fresnel choice, and each segment after a specular
     // event in a scattering medium (its camera_volume scattering point, drawn whether or not the view
     // is measured so that the other views do not depend on it). Scenes without scattering read exactly
     // the dimensions they read before media existed.
-    int next_dim = 3;
-    double w = start_weight[light];
-    ledger.emitted += w;
+    p.next_dim = 3;
+    p.w = start_weight[light];
+    p.slot = slot;
+    ledger.push_back({slot, &FluxLedger::emitted, p.w});
+    return p;
+}
 
-    const auto& objects = frame->scene->objects;
-    int depth = 0;       // specular events so far
-    int inside = -1;     // dielectric object the photon travels in (-1: outside medium)
-    for (;;) {
-        log.ray(origin, dir, 1e-6, 1e30, false);
-        const Hit hit = tracer->intersect(origin, dir);
-        const MediumCoefficients& medium = media[static_cast<std::size_t>(inside + 1)];
-        const double sigma_t = medium.extinction();
-        if (sigma_t > 0.0) {
-            const double length = hit.valid ? hit.t : std::numeric_limits<double>::infinity();
-            if (depth > 0 && medium.scatters()) {
-                const double u = rng.get(next_dim++);
-                if (volume && inside == camera_medium) scatter_to_camera(origin, dir, length, w, u, medium, acc, log);
-            }
-            // Beer-Lambert with extinction; an absorbing-only medium books exactly what it did before.
-            const double kept = hit.valid ? w * std::exp(-sigma_t * length) : 0.0;
-            const double lost = w - kept;
-            const double absorbed = medium.scattering > 0.0 ? lost * (medium.absorption / sigma_t) : lost;
-            ledger.absorbed += absorbed;
-            ledger.scattered += lost - absorbed;
-            w = kept;
+bool Transport::step(PhotonState& p, const Hit& hit, std::vector<LedgerEvent>& ledger, Accumulators& acc,
+                     std::vector<ShadowQuery>& shadows) const {
+    const MediumCoefficients& medium = media[static_cast<std::size_t>(p.inside + 1)];
+    const double sigma_t = medium.extinction();
+    if (sigma_t > 0.0) {
+        const double length = hit.valid ? hit.t : std::numeric_limits<double>::infinity();
+        if (p.depth > 0 && medium.scatters()) {
+            const double u = p.rng.get(p.next_dim++);
+            if (volume && p.inside == camera_medium) scatter_to_camera(p.origin, p.dir, length, p.w, u, medium, acc, shadows);
         }
-        if (!hit.valid) {
-            ledger.escaped += w;
-            return;
-        }
-        const Material& material = objects[static_cast<std::size_t>(hit.object)].material;
-        if (material.type == MaterialType::Diffuse) {
-            if (depth == 0) {
-                ledger.direct += w;
-                return;
-            }
-            // The camera pixel's data is fetched first (prefetch) so that its cache misses overlap the
-            // receiver deposit's.
-            std::ptrdiff_t pixel = -1;
-            if (camera) {
-                pixel = camera_pixel(hit.position);
-                if (pixel >= 0) {
-                    __builtin_prefetch(&pixel_info[static_cast<std::size_t>(pixel)]);
-                    __builtin_prefetch(&acc.pixels[acc.pixel_offset + static_cast<std::size_t>(pixel)], 1);
-                }
-            }
-            if (hit.object == receiver_object) {
-                ledger.deposited_receiver += w;
-                const int bin = chart->bin_of(hit.position);
-                if (bin >= 0) add_fixed(acc.bins[acc.bin_offset + static_cast<std::size_t>(bin)], w);
-            } else {
-                ledger.deposited_other += w;
-            }
-            if (pixel >= 0) deposit_camera(hit, static_cast<std::size_t>(pixel), dir, w, acc, log);
-            return;
-        }
-        if (depth >= max_depth) {
-            ledger.truncated += w;
-            return;
-        }
-        ++depth;
-
-        const bool from_outside = glm::dot(dir, hit.geometric_normal) < 0.0;
-        // Normal on the side the photon arrives from; fall back to the geometric one where the
-        // interpolated normal disagrees with the side (grazing hits on coarse meshes).
-        glm::dvec3 n = from_outside ? hit.shading_normal : -hit.shading_normal;
-        double cos_i = -glm::dot(dir, n);
-        if (cos_i <= 0.0) {
-            n = from_outside ? hit.geometric_normal : -hit.geometric_normal;
-            cos_i = -glm::dot(dir, n);
-        }
-        const glm::dvec3 reflected = dir + 2.0 * cos_i * n;
-        if (material.type == MaterialType::Mirror) {
-            dir = glm::normalize(reflected);
-            origin = hit.position;
-            continue;   // the medium does not change at a mirror
-        }
-        const double ior = material.ior + material.dispersion * u_dispersion;
-        const double n_i = from_outside ? outside_ior : ior;
-        const double n_t = from_outside ? ior : outside_ior;
-        const double eta = n_i / n_t;
-        const double sin2_t = eta * eta * (1.0 - cos_i * cos_i);
-        bool reflect = sin2_t >= 1.0;   // total internal reflection
-        double cos_t = 0.0;
-        if (!reflect) {
-            cos_t = std::sqrt(1.0 - sin2_t);
-            // Fresnel by Russian roulette: unbiased and flux conserving, one path per photon.
-            if (fresnel) reflect = rng.get(next_dim++) < fresnel_reflectance(cos_i, cos_t, n_i, n_t);
-        }
-        dir = reflect ? reflected : eta * dir + (eta * cos_i - cos_t) * n;
-        dir = glm::normalize(dir);
-        origin = hit.position;
-        // Inside or outside is decided by where the new direction actually points.
-        inside = glm::dot(dir, hit.geometric_normal) < 0.0 ? hit.object : -1;
+        // Beer-Lambert with extinction; an absorbing-only medium books exactly what it did before.
+        const double kept = hit.valid ? p.w * std::exp(-sigma_t * length) : 0.0;
+        const double lost = p.w - kept;
+        const double absorbed = medium.scattering > 0.0 ? lost * (medium.absorption / sigma_t) : lost;
+        ledger.push_back({p.slot, &FluxLedger::absorbed, absorbed});
+        ledger.push_back({p.slot, &FluxLedger::scattered, lost - absorbed});
+        p.w = kept;
     }
+    if (!hit.valid) {
+        ledger.push_back({p.slot, &FluxLedger::escaped, p.w});
+        return false;
+    }
+    const Material& material = frame->scene->objects[static_cast<std::size_t>(hit.object)].material;
+    if (material.type == MaterialType::Diffuse) {
+        if (p.depth == 0) {
+            ledger.push_back({p.slot, &FluxLedger::direct, p.w});
+            return false;
+        }
+        // The camera pixel's data is fetched first (prefetch) so that its cache misses overlap the
+        // receiver deposit's.
+        std::ptrdiff_t pixel = -1;
+        if (camera) {
+            pixel = camera_pixel(hit.position);
+            if (pixel >= 0) {
+                __builtin_prefetch(&pixel_info[static_cast<std::size_t>(pixel)]);
+                __builtin_prefetch(&acc.pixels[static_cast<std::size_t>(pixel)], 1);
+            }
+        }
+        if (hit.object == receiver_object) {
+            ledger.push_back({p.slot, &FluxLedger::deposited_receiver, p.w});
+            const int bin = chart->bin_of(hit.position);
+            if (bin >= 0) add_sum(acc.bins[static_cast<std::size_t>(bin)], to_fixed(p.w));
+        } else {
+            ledger.push_back({p.slot, &FluxLedger::deposited_other, p.w});
+        }
+        if (pixel >= 0) deposit_camera(hit, static_cast<std::size_t>(pixel), p.dir, p.w, acc, shadows);
+        return false;
+    }
+    if (p.depth >= max_depth) {
+        ledger.push_back({p.slot, &FluxLedger::truncated, p.w});
+        return false;
+    }
+    ++p.depth;
+
+    const glm::dvec3 dir = p.dir;
+    const bool from_outside = glm::dot(dir, hit.geometric_normal) < 0.0;
+    // Normal on the side the photon arrives from; fall back to the geometric one where the
+    // interpolated normal disagrees with the side (grazing hits on coarse meshes).
+    glm::dvec3 n = from_outside ? hit.shading_normal : -hit.shading_normal;
+    double cos_i = -glm::dot(dir, n);
+    if (cos_i <= 0.0) {
+        n = from_outside ? hit.geometric_normal : -hit.geometric_normal;
+        cos_i = -glm::dot(dir, n);
+    }
+    const glm::dvec3 reflected = dir + 2.0 * cos_i * n;
+    if (material.type == MaterialType::Mirror) {
+        p.dir = glm::normalize(reflected);
+        p.origin = hit.position;
+        return true;   // the medium does not change at a mirror
+    }
+    // Without dispersion ior + 0 * u is ior: the sample is read only where it matters.
+    const double ior = material.dispersion != 0.0 ? material.ior + material.dispersion * p.rng.get(2) : material.ior;
+    const double n_i = from_outside ? outside_ior : ior;
+    const double n_t = from_outside ? ior : outside_ior;
+    const double eta = n_i / n_t;
+    const double sin2_t = eta * eta * (1.0 - cos_i * cos_i);
+    bool reflect = sin2_t >= 1.0;   // total internal reflection
+    double cos_t = 0.0;
+    if (!reflect) {
+        cos_t = std::sqrt(1.0 - sin2_t);
+        // Fresnel by Russian roulette: unbiased and flux conserving, one path per photon.
+        if (fresnel) reflect = p.rng.get(p.next_dim++) < fresnel_reflectance(cos_i, cos_t, n_i, n_t);
+    }
+    p.dir = glm::normalize(reflect ? reflected : eta * dir + (eta * cos_i - cos_t) * n);
+    p.origin = hit.position;
+    // Inside or outside is decided by where the new direction actually points.
+    p.inside = glm::dot(p.dir, hit.geometric_normal) < 0.0 ? hit.object : -1;
+    return true;
+}
+
+void Transport::trace(std::uint32_t replica, std::uint64_t i, FluxLedger& ledger, Accumulators& acc,
+                      RayRecorder& log) const {
+    std::vector<LedgerEvent> events;
+    std::vector<ShadowQuery> shadows;
+    glm::dvec2 emission;
+    sampler_of(replica, i).get2(0, emission.x, emission.y);
+    PhotonState p = start(replica, i, emission, 0, events);
+    for (bool alive = true; alive;) {
+        log.ray(p.origin, p.dir, 1e-6, 1e30, false);
+        alive = step(p, tracer->intersect(p.origin, p.dir), events, acc, shadows);
+        for (const ShadowQuery& q : shadows) {
+            log.ray(q.ray.origin, q.ray.dir, q.ray.tmin, q.ray.tmax, true);
+            if (!tracer->occluded(q.ray.origin, q.ray.dir, q.ray.tmin, q.ray.tmax)) apply_shadow(q);
+        }
+        shadows.clear();
+    }
+    for (const LedgerEvent& e : events) ledger.*e.field += e.value;
 }
 
 std::ptrdiff_t Transport::camera_pixel(const glm::dvec3& p) const {
@@ -155,9 +175,8 @@ std::ptrdiff_t Transport::camera_pixel(const glm::dvec3& p) const {
     return static_cast<std::ptrdiff_t>(gbuffer->index(ix, iy));
 }
 
-template <class Log>
 void Transport::deposit_camera(const Hit& hit, std::size_t index, const glm::dvec3& dir_in, double w,
-                               Accumulators& acc, Log& log) const {
+                               Accumulators& acc, std::vector<ShadowQuery>& shadows) const {
     const PixelInfo& pixel = pixel_info[index];
     if (pixel.object != hit.object) return;   // also rejects pixels the G-buffer does not cover
     glm::dvec3 to_camera = camera->position - hit.position;
@@ -169,16 +188,11 @@ void Transport::deposit_camera(const Hit& hit, std::size_t index, const glm::dve
     if (side * glm::dot(hit.geometric_normal, to_camera) <= 0.0) return;
     const double cos_c = side * glm::dot(hit.shading_normal, to_camera);
     if (cos_c <= 0.0) return;
-    log.ray(hit.position, to_camera, 0.0, dist * (1.0 - 1e-6), true);
-    if (tracer->occluded(hit.position, to_camera, 0.0, dist * (1.0 - 1e-6))) return;
     // E_pixel += w / A_pix with A_pix = omega d^2 / cos; stored relative to the pixel's own G-buffer
-    // footprint so the fixed-point value stays near q.
+    // footprint so the fixed-point value stays near q. Added if the pinhole sees the point.
     const double x = w * pixel.scale * cos_c / (dist * dist);
-    add_fixed(acc.pixels[acc.pixel_offset + index], x);
+    shadows.push_back({{hit.position, to_camera, 0.0, dist * (1.0 - 1e-6)}, &acc.pixels[index],
+                       to_fixed(x), false});
 }
-
-template void Transport::trace<NoRayLog>(std::uint32_t, std::uint64_t, FluxLedger&, Accumulators&, NoRayLog&) const;
-template void Transport::trace<RayRecorder>(std::uint32_t, std::uint64_t, FluxLedger&, Accumulators&,
-                                            RayRecorder&) const;
 
 }  // namespace caustics::detail

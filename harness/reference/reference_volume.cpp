@@ -54,9 +54,9 @@ void setup_media(Transport& transport, const Scene& scene, bool volume) {
     }
 }
 
-template <class Log>
 void Transport::scatter_to_camera(const glm::dvec3& origin, const glm::dvec3& dir, double length, double w, double u,
-                                  const MediumCoefficients& medium, Accumulators& acc, Log& log) const {
+                                  const MediumCoefficients& medium, Accumulators& acc,
+                                  std::vector<ShadowQuery>& shadows) const {
     const double sigma_t = medium.extinction();
     const double interact = std::isinf(length) ? 1.0 : -std::expm1(-sigma_t * length);   // P
     const double t = -std::log1p(-u * interact) / sigma_t;
@@ -68,21 +68,15 @@ void Transport::scatter_to_camera(const glm::dvec3& origin, const glm::dvec3& di
     const double r = std::sqrt(r2);
     if (!(r >= kVolumeMinDistance)) return;
     to_camera /= r;
-    log.ray(x, to_camera, 0.0, r * (1.0 - 1e-6), true);
-    if (tracer->occluded(x, to_camera, 0.0, r * (1.0 - 1e-6))) return;
     const std::size_t k = static_cast<std::size_t>(pixel);
     // The phase function's angle is between the direction of travel before (dir) and after (to_camera).
     const double phase = henyey_greenstein(glm::dot(dir, to_camera), medium.anisotropy);
     const double value = w * interact * (medium.scattering / sigma_t) * phase * std::exp(-sigma_t * r) *
                          volume_scale[k] / r2;
     const double fixed = std::min(value * kFixedScale + 0.5, 0x1.0p62);
-    add_saturating(acc.volume[acc.volume_offset + k], static_cast<std::int64_t>(fixed));
+    // Added if the pinhole sees the point.
+    shadows.push_back({{x, to_camera, 0.0, r * (1.0 - 1e-6)}, &acc.volume[k],
+                       static_cast<std::int64_t>(fixed), true});
 }
-
-template void Transport::scatter_to_camera<NoRayLog>(const glm::dvec3&, const glm::dvec3&, double, double, double,
-                                                     const MediumCoefficients&, Accumulators&, NoRayLog&) const;
-template void Transport::scatter_to_camera<RayRecorder>(const glm::dvec3&, const glm::dvec3&, double, double, double,
-                                                        const MediumCoefficients&, Accumulators&,
-                                                        RayRecorder&) const;
 
 }  // namespace caustics::detail

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <atomic>
 #include <limits>
 #include <vector>
 
@@ -26,16 +27,28 @@ namespace caustics::detail {
 // one replica stay below 2^60, and each contribution keeps ~2^-30 relative precision.
 constexpr double kFixedScale = 1073741824.0;  // 2^30
 
-inline void add_fixed(std::int64_t& acc, double x) {
+inline std::int64_t to_fixed(double x) {
     // x >= 0: adding 1/2 and truncating rounds to nearest, without a libm call.
-    acc += static_cast<std::int64_t>(x * kFixedScale + 0.5);
+    return static_cast<std::int64_t>(x * kFixedScale + 0.5);
 }
 
-// Ray logs: NoRayLog compiles away; RayRecorder keeps every query for bench/ replays.
-struct NoRayLog {
-    void ray(const glm::dvec3&, const glm::dvec3&, double, double, bool) {}
-};
+// The sums are shared by all threads and added to atomically: integer sums are exact, so any order of
+// the additions gives the same bits. Deposits are sparse (a photon adds to one bin and at most one
+// pixel), so this is far cheaper than a private copy of every view per thread that has to be zeroed and
+// merged (for a 1024 x 768 camera and 8 replicas, 50 MB per thread).
+inline void add_sum(std::int64_t& acc, std::int64_t x) { std::atomic_ref<std::int64_t>(acc).fetch_add(x, std::memory_order_relaxed); }
 
+// Saturating sum of non-negative fixed-point values (camera_volume; see reference_volume.cpp):
+// min(a + b, 2^63 - 1) is associative for non-negative terms, so the result is order independent too.
+inline void add_saturating(std::int64_t& acc, std::int64_t x) {
+    std::atomic_ref<std::int64_t> a(acc);
+    std::int64_t old = a.load(std::memory_order_relaxed), sum;
+    do {
+        if (__builtin_add_overflow(old, x, &sum)) sum = std::numeric_limits<std::int64_t>::max();
+    } while (!a.compare_exchange_weak(old, sum, std::memory_order_relaxed));
+}
+
+// The ray log of record_reference_rays: every query, for bench/ replays.
 struct RayRecorder {
     double offset = 0.0;   // the tracer's own minimum tnear
     std::vector<RecordedRay> rays;
@@ -45,17 +58,17 @@ struct RayRecorder {
         r.tnear = static_cast<float>(std::max(tmin, offset));
         r.tfar = tmax >= 3e38 ? std::numeric_limits<float>::infinity() : static_cast<float>(tmax);
         r.shadow = shadow;
+        r.segment = 0;   // set per photon by record_reference_rays
         rays.push_back(r);
     }
 };
 
-// Per replica, bin / pixel: the sum of round(2^30 q). A batch belongs to one replica, so a thread adds
-// into the slice of the replica it is tracing (`replica` offsets).
+// Where one replica's deposits go: its slices of the receiver, camera and camera_volume sums (bin /
+// pixel: the sum of round(2^30 q); null: not measured). A batch belongs to one replica.
 struct Accumulators {
-    std::vector<std::int64_t> bins;     // receiver, replica-major
-    std::vector<std::int64_t> pixels;   // camera, replica-major
-    std::vector<std::int64_t> volume;   // camera_volume, replica-major (empty: not measured)
-    std::size_t bin_offset = 0, pixel_offset = 0, volume_offset = 0;
+    std::int64_t* bins = nullptr;
+    std::int64_t* pixels = nullptr;
+    std::int64_t* volume = nullptr;
 };
 
 // What a camera deposit needs of one pixel, packed so that it costs one cache miss: the pixel's
@@ -63,6 +76,48 @@ struct Accumulators {
 struct PixelInfo {
     double scale = 0.0;
     int object = -1;
+};
+
+// One photon in flight: what its next segment needs.
+struct PhotonState {
+    PhotonSampler rng;
+    glm::dvec3 origin{0.0}, dir{0.0};
+    double w = 0.0;             // weight q now
+    int next_dim = 3;           // next sample dimension to read
+    int depth = 0;              // specular events so far
+    int inside = -1;            // dielectric object the photon travels in (-1: outside medium)
+    std::uint32_t slot = 0;     // its place in the photon order of its chunk (ledger events)
+};
+
+// One addition to the flux ledger. The ledger is a floating-point sum, so its bits depend on the order of
+// the additions: a wave of photons books events and the chunk replays them in photon order (each
+// photon's own in the order it made them), the order of tracing one photon after another.
+struct LedgerEvent {
+    std::uint32_t slot;
+    double FluxLedger::*field;
+    double value;
+};
+
+// A visibility query whose integer increment lands in `target` when nothing blocks it (camera deposits
+// and camera_volume points). Deferred so that a wave's queries go to Embree as packets.
+struct ShadowQuery {
+    RayQuery ray;
+    std::int64_t* target;
+    std::int64_t increment;
+    bool saturating;   // camera_volume: add_saturating (reference_volume.cpp)
+};
+
+// Per thread: the wave's buffers, kept from chunk to chunk.
+struct WaveScratch {
+    std::vector<PhotonState> photons;
+    std::vector<std::uint32_t> active, next;
+    std::vector<RayQuery> queries;
+    std::vector<Hit> hits;
+    std::vector<ShadowQuery> shadows;
+    std::vector<RayQuery> shadow_rays;
+    std::vector<std::uint8_t> occluded;
+    std::vector<LedgerEvent> events, sorted;
+    std::vector<std::uint32_t> event_start;
 };
 
 // Everything one photon needs, shared read-only by all threads.
@@ -94,28 +149,45 @@ struct Transport {
     PhotonSampler sampler_of(std::uint32_t replica, std::uint64_t i) const {
         return PhotonSampler(sampler, seed + 0x51ED270B27D5A3C1ull * (i % emitters.size()), replica, i / emitters.size());
     }
+    // The batch's photon order (photon_source.hpp); emission[i - first] receives photon i's sample
+    // values of dimensions 0 and 1, which the order is made from and its emission reads.
     void batch_order(std::uint32_t replica, std::uint64_t first, std::uint64_t last, std::vector<std::uint32_t>& order,
-                     std::vector<std::uint32_t>& scratch) const;
-    template <class Log>
-    void trace(std::uint32_t replica, std::uint64_t i, FluxLedger& ledger, Accumulators& acc, Log& log) const;
+                     std::vector<std::uint32_t>& scratch, std::vector<glm::dvec2>& emission) const;
+    // Photon i of a replica as it leaves its light (emission: its dimensions 0 and 1); books its
+    // emitted weight.
+    PhotonState start(std::uint32_t replica, std::uint64_t i, const glm::dvec2& emission, std::uint32_t slot,
+                      std::vector<LedgerEvent>& ledger) const;
+    // Everything one segment does after its closest-hit query `hit`: extinction, the camera_volume
+    // point, the deposit, or the next direction. Ledger additions go to `ledger`, visibility queries to
+    // `shadows` (the caller resolves both). False when the photon's path has ended.
+    bool step(PhotonState& p, const Hit& hit, std::vector<LedgerEvent>& ledger, Accumulators& acc,
+              std::vector<ShadowQuery>& shadows) const;
+    // One photon, one query at a time, each logged (record_reference_rays).
+    void trace(std::uint32_t replica, std::uint64_t i, FluxLedger& ledger, Accumulators& acc, RayRecorder& log) const;
+    // Photons first + order[0 .. n) of one replica, in that order as far as the ledger's bits go, traced
+    // as waves: all live photons' next segments as one batch of packet queries, then their visibility
+    // queries as another (reference_wavefront.cpp). Adds to `ledger` and `acc`.
+    // emission[k]: the dimensions 0 and 1 of photon first + k (batch_order).
+    void trace_wave(std::uint32_t replica, std::uint64_t first, const std::uint32_t* order, const glm::dvec2* emission,
+                    std::size_t n, FluxLedger& ledger, Accumulators& acc, WaveScratch& scratch) const;
     // The pixel a deposit at p would land in, or -1 (outside the image or behind the camera).
     std::ptrdiff_t camera_pixel(const glm::dvec3& p) const;
-    template <class Log>
     void deposit_camera(const Hit& hit, std::size_t index, const glm::dvec3& dir_in, double w, Accumulators& acc,
-                        Log& log) const;
+                        std::vector<ShadowQuery>& shadows) const;
     // camera_volume: one scattering point on the segment origin + t dir, t in [0, length) (length may
     // be infinite), of a photon of weight w at the segment's start; `u` is its sample value.
-    template <class Log>
     void scatter_to_camera(const glm::dvec3& origin, const glm::dvec3& dir, double length, double w, double u,
-                           const MediumCoefficients& medium, Accumulators& acc, Log& log) const;
+                           const MediumCoefficients& medium, Accumulators& acc, std::vector<ShadowQuery>& shadows) const;
 };
+
+// Adds a resolved visibility query's increment (when not occluded).
+inline void apply_shadow(const ShadowQuery& q) {
+    if (q.saturating) add_saturating(*q.target, q.increment);
+    else add_sum(*q.target, q.increment);
+}
 
 // The media and, when `volume`, the camera_volume set-up of `transport` (reference_volume.cpp).
 void setup_media(Transport& transport, const Scene& scene, bool volume);
 
-// Saturating sum of non-negative fixed-point values (camera_volume; see reference_volume.cpp).
-inline void add_saturating(std::int64_t& acc, std::int64_t x) {
-    if (__builtin_add_overflow(acc, x, &acc)) acc = std::numeric_limits<std::int64_t>::max();
-}
 
 }  // namespace caustics::detail
