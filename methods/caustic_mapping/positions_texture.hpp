@@ -78,8 +78,24 @@ inline void extend_positions(GBuffer& g, int texels) {
                 for (int x = x0; x < x1; ++x)
                     if (last[x - x0] < 0 && first[x - x0] >= 0 && id[x] != -1) last[x - x0] = y, --missing;
             }
-            for (int x = x0; x < x1; ++x)
-                extend_line(H, first[x - x0], last[x - x0], [&](int k) { return g.index(x, k); });
+            // The fills row by row across the block (each texel is written once, from its own column's
+            // edge, so the order does not change a value): row-major stores instead of a stride of a
+            // whole row per texel.
+            int top = H, bottom = -1;
+            for (int x = x0; x < x1; ++x) {
+                if (first[x - x0] < 0) continue;
+                top = std::min(top, std::max(0, first[x - x0] - texels));
+                bottom = std::max(bottom, std::min(H - 1, last[x - x0] + texels));
+            }
+            for (int y = top; y <= bottom; ++y)
+                for (int x = x0; x < x1; ++x) {
+                    const int a = first[x - x0], b = last[x - x0];
+                    if (a < 0) continue;
+                    if (y < a && y >= a - texels)
+                        fill(g.index(x, y), g.index(x, a), g.index(x, a + 1 <= b ? a + 1 : a), static_cast<float>(a - y));
+                    else if (y > b && y <= b + texels)
+                        fill(g.index(x, y), g.index(x, b), g.index(x, b - 1 >= a ? b - 1 : b), static_cast<float>(y - b));
+                }
         }
     });
 }
