@@ -10,6 +10,7 @@ from matplotlib.container import ErrorbarContainer  # noqa: E402
 from matplotlib.colors import LogNorm, Normalize  # noqa: E402
 from matplotlib.ticker import LogFormatter  # noqa: E402
 
+from growth import grid_series, loglog_slope  # noqa: E402
 from load import numeric, ok_runs, read_image, run_images, scene_baseline  # noqa: E402
 from pareto import pareto_front  # noqa: E402
 
@@ -225,28 +226,31 @@ def error_vs_iterations(frame, scene, directory):
 
 
 def fps_vs_grid(frame, scene, directory):
-    """fps (1000 / frame time, render only in older sweeps) against grid on log-log axes; the legend gives the
-    fitted slope d log fps / d log grid."""
-    runs = ok_runs(frame[frame["scene"] == scene])
-    if runs.empty or runs["grid"].nunique() < 2:
+    """fps (1000 / frame time, render only in older sweeps) against grid on log-log axes, one line per
+    method and setting of its other varied parameters (growth.grid_series); the legend gives the fitted
+    exponent s of frame time ~ grid^s (the fps line's slope is -s), the growth table's "all grids" column."""
+    series = [s for s in grid_series(frame, scene) if len(s[2]) >= 2]
+    if not series:
         return None
+    runs = ok_runs(frame[frame["scene"] == scene])
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
-    style = _style(runs["method"].unique())   # speed is not fitted: plain method names
-    for label, group in runs.groupby("method"):
-        g = group.groupby("grid")["frame_fps"].median().sort_index()
-        if len(g) < 2:
-            continue
-        slope = np.polyfit(np.log(g.index.values.astype(float)), np.log(g.values), 1)[0]
-        color, marker = style[label]
-        ax.plot(g.index, g.values, color=color, marker=marker, label=f"{label} (slope {slope:+.2f})")
+    style = _style(sorted({method for _, method, _ in series}))   # speed is not fitted: plain method names
+    dashes = ["-", "--", ":", "-."]
+    seen = {}
+    for label, method, times in series:
+        color, marker = style[method]
+        slope = loglog_slope(times.index, times.values)
+        ax.plot(times.index, 1000.0 / times.values, color=color, marker=marker,
+                linestyle=dashes[seen.setdefault(method, 0) % len(dashes)], label=f"{label}: time ~ grid^{slope:.2f}")
+        seen[method] += 1
     ax.set_xscale("log", base=2)
     ax.set_yscale("log")
     ax.set_xlabel("grid resolution  (log2)")
     ax.set_ylabel("fps = 1000 / frame time  (log)" if has_frame_time(runs)
                   else "frames per second of render()  (log)")
-    ax.set_title(f"{scene}: fps vs grid (fitted log-log slope)")
+    ax.set_title(f"{scene}: fps vs grid (fitted exponent of frame time)")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=7)
     return _save(fig, directory, f"fps_vs_grid_{scene}")
 
 

@@ -86,6 +86,9 @@ def main(argv):
         table = tables.write_tables(frame, scene, tab_dir, budget, target, paper, context)
         if table:
             out += [table, ""]
+        growth = tables.write_growth_table(frame, scene, tab_dir)
+        if growth:
+            out += [growth, ""]
         out += volume.volume_section(frame, scene, fig_dir, tab_dir, sweep_dir)
     not_ok = frame[frame["status"] != "ok"]
     if not not_ok.empty:

@@ -1,9 +1,11 @@
 """Summary tables (Markdown and LaTeX booktabs): equal-time, equal-quality and paper-setting columns, with
-the no-caustic baseline as a row of its own so every method's error can be read against it."""
+the no-caustic baseline as a row of its own so every method's error can be read against it; and the growth
+table: the fitted exponent of frame time against grid per method."""
 import os
 
 import numpy as np
 
+from growth import growth_rows
 from load import ok_runs, scene_baseline
 
 # Cell marks. A method that does no better than the flat interface has not produced a caustic worth
@@ -122,4 +124,32 @@ def write_tables(frame, scene, directory, time_budget_ms, error_target, paper_se
         lines.append(f"\\par\\footnotesize {_tex(notes)}")
     lines.append("\\end{table}")
     _write(os.path.join(directory, f"summary_{scene}.tex"), "\n".join(lines) + "\n")
+    return "\n".join(md)
+
+
+def write_growth_table(frame, scene, directory):
+    """How frame time grows with grid, per method and setting (growth.growth_rows): the fitted exponent s of
+    frame time ~ grid^s over all grids (the fps-vs-grid figure's legend) and over the upper half, where the
+    fixed per-frame costs (camera and receiver lookups, fixed-size maps) weigh least. Written as
+    growth_SCENE.md and .tex; returns the Markdown, or None where no series has 3 grids."""
+    rows = growth_rows(frame, scene)
+    if not rows:
+        return None
+    caption = (f"{scene}: growth of the frame time with grid, per method (and per setting of its other varied "
+               "parameters): least-squares exponent s of frame time ~ grid^s on log-log axes over all grids "
+               "and over the upper half (grids at or above the median), median frame time per grid. "
+               "2 means the cost follows the grid's cells of a surface, 3 those of a volume; less than the "
+               "algorithm's exponent means fixed costs still weigh.")
+    header = ["method", "grids", "ms at first grid", "ms at last grid", "slope, all grids", "slope, upper half"]
+    cells = [[r["series"], " ".join(str(g) for g in r["grids"]), _fmt(r["ms_first"]), _fmt(r["ms_last"]),
+              f"{r['slope']:.2f}", f"{r['slope_upper']:.2f} ({r['upper_grids'][0]}-{r['upper_grids'][-1]})"]
+             for r in rows]
+    md = [f"Table: {caption}", "", "| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    md += ["| " + " | ".join(c) + " |" for c in cells]
+    _write(os.path.join(directory, f"growth_{scene}.md"), "\n".join(md) + "\n")
+    lines = ["\\begin{table}[t]", "\\centering", f"\\caption{{{_tex(caption)}}}", f"\\label{{tab:growth-{scene}}}",
+             "\\begin{tabular}{llrrrr}", "\\toprule", " & ".join(_tex(h) for h in header) + " \\\\", "\\midrule"]
+    lines += [" & ".join(_tex(c) for c in row) + " \\\\" for row in cells]
+    lines += ["\\bottomrule", "\\end{tabular}", "\\end{table}"]
+    _write(os.path.join(directory, f"growth_{scene}.tex"), "\n".join(lines) + "\n")
     return "\n".join(md)
