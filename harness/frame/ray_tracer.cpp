@@ -321,6 +321,26 @@ bool RayTracer::occluded(const glm::dvec3& origin, const glm::dvec3& dir, double
     return ray.tfar < 0.0f;
 }
 
+namespace {
+
+// Lane k of a 16-ray packet: the query's segment [tmin, tmax] in single precision.
+void set_lane(RTCRay16& p, int k, const RayQuery& q, double tmin) {
+    p.org_x[k] = static_cast<float>(q.origin.x);
+    p.org_y[k] = static_cast<float>(q.origin.y);
+    p.org_z[k] = static_cast<float>(q.origin.z);
+    p.dir_x[k] = static_cast<float>(q.dir.x);
+    p.dir_y[k] = static_cast<float>(q.dir.y);
+    p.dir_z[k] = static_cast<float>(q.dir.z);
+    p.tnear[k] = static_cast<float>(tmin);
+    p.tfar[k] = to_tfar(q.tmax);
+    p.time[k] = 0.0f;
+    p.mask[k] = 0xFFFFFFFFu;
+    p.id[k] = 0;
+    p.flags[k] = 0;
+}
+
+}  // namespace
+
 void RayTracer::intersect(const RayQuery* queries, std::size_t n, Hit* hits) const {
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
@@ -336,18 +356,7 @@ void RayTracer::intersect(const RayQuery* queries, std::size_t n, Hit* hits) con
             const double tmin = std::max(q.tmin, impl_->min_tmin);
             if (!valid_ray(q.origin, q.dir, tmin, q.tmax)) [[unlikely]]
                 invalid_ray("intersect", q.origin, q.dir, tmin, q.tmax);
-            p.ray.org_x[k] = static_cast<float>(q.origin.x);
-            p.ray.org_y[k] = static_cast<float>(q.origin.y);
-            p.ray.org_z[k] = static_cast<float>(q.origin.z);
-            p.ray.dir_x[k] = static_cast<float>(q.dir.x);
-            p.ray.dir_y[k] = static_cast<float>(q.dir.y);
-            p.ray.dir_z[k] = static_cast<float>(q.dir.z);
-            p.ray.tnear[k] = static_cast<float>(tmin);
-            p.ray.tfar[k] = to_tfar(q.tmax);
-            p.ray.time[k] = 0.0f;
-            p.ray.mask[k] = 0xFFFFFFFFu;
-            p.ray.id[k] = 0;
-            p.ray.flags[k] = 0;
+            set_lane(p.ray, k, q, tmin);
             p.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
             p.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
         }
@@ -380,18 +389,7 @@ void RayTracer::occluded(const RayQuery* queries, std::size_t n, std::uint8_t* o
             if (!valid_ray(q.origin, q.dir, tmin, q.tmax)) [[unlikely]]
                 invalid_ray("occluded", q.origin, q.dir, tmin, q.tmax);
             valid[k] = -1;
-            p.org_x[k] = static_cast<float>(q.origin.x);
-            p.org_y[k] = static_cast<float>(q.origin.y);
-            p.org_z[k] = static_cast<float>(q.origin.z);
-            p.dir_x[k] = static_cast<float>(q.dir.x);
-            p.dir_y[k] = static_cast<float>(q.dir.y);
-            p.dir_z[k] = static_cast<float>(q.dir.z);
-            p.tnear[k] = static_cast<float>(tmin);
-            p.tfar[k] = to_tfar(q.tmax);
-            p.time[k] = 0.0f;
-            p.mask[k] = 0xFFFFFFFFu;
-            p.id[k] = 0;
-            p.flags[k] = 0;
+            set_lane(p, k, q, tmin);
         }
         rtcOccluded16(valid, impl_->scene, &context, &p);
         // Embree sets tfar to -inf where a ray is occluded.

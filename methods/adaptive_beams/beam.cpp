@@ -1,5 +1,7 @@
 // Beam space, the area function, point-in-beam and the ray-beam integral (Sec. 4.3, 5.1-5.3).
 #include "beam.hpp"
+
+#include "gauss_legendre.hpp"
 #include "ray_beam.hpp"
 
 #include <algorithm>
@@ -41,18 +43,6 @@ double local_density(const Beam& b, const std::array<double, 3>& bary, double y,
     return b.flux * weight * std::exp(-sigma_t * path) * stretch / a;
 }
 
-// Gauss-Legendre nodes and weights on [-1, 1] for 1 to 4 points.
-struct Gauss {
-    int n;
-    double x[4], w[4];
-};
-const Gauss kGauss[4] = {
-    {1, {0.0}, {2.0}},
-    {2, {-0.5773502691896257, 0.5773502691896257}, {1.0, 1.0}},
-    {3, {-0.7745966692414834, 0.0, 0.7745966692414834}, {0.5555555555555556, 0.8888888888888888, 0.5555555555555556}},
-    {4, {-0.8611363115940526, -0.3399810435848563, 0.3399810435848563, 0.8611363115940526},
-     {0.3478548451374538, 0.6521451548625461, 0.6521451548625461, 0.3478548451374538}},
-};
 
 }  // namespace
 
@@ -219,7 +209,7 @@ double volume_radiance_pointwise(const Beam& b, const MediumCoefficients& medium
     nc = kept;
     cand[nc++] = s_hi;
     std::sort(cand, cand + nc);
-    const Gauss& gq = kGauss[std::clamp(samples, 1, 4) - 1];
+    const GaussRule& gq = gauss_rule(samples);
     const double sigma_t = medium.extinction();
     double total = 0.0;
     for (int k = 0; k + 1 < nc; ++k) {

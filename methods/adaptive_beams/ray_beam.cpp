@@ -1,6 +1,8 @@
 // The ray-beam integral per fragment with the beam's constants hoisted (Sec. 5.1, 5.2; see ray_beam.hpp).
 #include "ray_beam.hpp"
 
+#include "gauss_legendre.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -9,18 +11,6 @@ namespace {
 
 double cross2(const glm::dvec2& a, const glm::dvec2& b) { return a.x * b.y - a.y * b.x; }
 
-// Gauss-Legendre nodes and weights on [-1, 1] for 1 to 4 points.
-struct Gauss {
-    int n;
-    double x[4], w[4];
-};
-const Gauss kGauss[4] = {
-    {1, {0.0}, {2.0}},
-    {2, {-0.5773502691896257, 0.5773502691896257}, {1.0, 1.0}},
-    {3, {-0.7745966692414834, 0.0, 0.7745966692414834}, {0.5555555555555556, 0.8888888888888888, 0.5555555555555556}},
-    {4, {-0.8611363115940526, -0.3399810435848563, 0.3399810435848563, 0.8611363115940526},
-     {0.3478548451374538, 0.6521451548625461, 0.6521451548625461, 0.3478548451374538}},
-};
 
 constexpr int kPairs[3][2] = {{1, 2}, {2, 0}, {0, 1}};   // side k joins corners j, l (opposite corner k)
 
@@ -92,7 +82,7 @@ double RayBeam::radiance(const glm::dvec3& w, double s_max, int samples, BeamCou
         }
     nc = kept;
     cand[nc++] = s_hi;
-    const Gauss& gq = kGauss[std::clamp(samples, 1, 4) - 1];
+    const GaussRule& gq = gauss_rule(samples);
     auto edges = [&](double s, double F[3]) {
         for (int k = 0; k < 3; ++k) F[k] = f0_[k] + s * (f1[k] + s * f2[k]);
         return F[0] + F[1] + F[2];
