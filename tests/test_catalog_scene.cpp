@@ -244,7 +244,7 @@ std::vector<SceneCase> cases() {
              s["camera"]["height"] = 16384;
          },
          {"camera.width", "memory limit", "valid:"}},
-        // The scene fits the default replicas, but 256 replicas (one copy of the sums per thread each)
+        // The scene fits the default replicas, but 256 replicas (sums, images and cache payload each)
         // do not: refused by the reference before it allocates.
         {"Replicas256On2048SquaredReceiver", [](json& s, const CaseDir&) { s["receiver"]["resolution"] = {2048, 2048}; },
          {"receiver.resolution", "256 reference replicas", "memory limit", "valid:"}, true,
@@ -399,8 +399,9 @@ TEST(MemoryEstimate, PerBinAndPerPixelTerms) {
     // R = 8, T = 2: trace 8 R (1 + T) = 192, finish 8 R + 2 (8 + 4 R) = 144, store 8 R + 8 + 4 R + 16 R = 232.
     EXPECT_DOUBLE_EQ(caustics::reference_bytes_per_bin(8, 2), 8.0 + 232.0 + 16.0);
     EXPECT_DOUBLE_EQ(caustics::reference_bytes_per_pixel(8, 2), 29.0 + 24.0 + 1.0 + 232.0 + 24.0);
-    // Many threads: the per-thread copies of the sums dominate.
-    EXPECT_DOUBLE_EQ(caustics::reference_bytes_per_bin(8, 16), 8.0 + 8.0 * 8 * 17 + 16.0);
+    // The threads deposit atomically into one copy of the sums: the estimate does not grow with them.
+    EXPECT_DOUBLE_EQ(caustics::reference_bytes_per_bin(8, 16), caustics::reference_bytes_per_bin(8, 2));
+    EXPECT_DOUBLE_EQ(caustics::reference_bytes_per_pixel(8, 64), caustics::reference_bytes_per_pixel(8, 2));
 }
 
 caustics::Scene scene_with(int receiver, int camera_w, int camera_h, int grid) {

@@ -5,7 +5,8 @@
 //   receiver, per bin:  8 (chart areas) + max(trace, finish, store) + 16 (method map, truth, metrics)
 //   camera, per pixel:  29 (G-buffer) + 24 (deposit footprints) + 1 + max(trace, finish, store) + 24
 //                       (beauty RGB, method map, metrics)
-//     with trace  = 8 R (1 + T)   integer sums, shared and one copy per thread (reference.cpp)
+//     with trace  = 8 R           integer sums, one copy shared by every thread (atomic deposits,
+//                                 reference.cpp)
 //          finish = 8 R + 2 (8 + 4 R)   sums, and mean, standard error and R replica images (x2 while a
 //                                       noise-target round replaces the previous result)
 //          store  = 8 R + (8 + 4 R) + 16 R   sums, images, cache payload and file bytes
@@ -67,8 +68,9 @@ int worker_threads() {
 namespace {
 
 double view_peak(int replicas, int threads) {
-    const double r = std::max(1, replicas), t = std::max(1, threads);
-    const double trace = 8.0 * r * (1.0 + t);
+    (void)threads;   // the threads deposit atomically into one copy of the sums
+    const double r = std::max(1, replicas);
+    const double trace = 8.0 * r;
     const double finish = 8.0 * r + 2.0 * (8.0 + 4.0 * r);
     const double store = 8.0 * r + (8.0 + 4.0 * r) + 16.0 * r;
     return std::max({trace, finish, store});
@@ -172,7 +174,7 @@ void check_scene_memory(const Scene& scene, int replicas, int threads) {
                          ": about " + format_bytes(total) + " in all with " + std::to_string(replicas) +
                          " reference replicas and " + std::to_string(threads) +
                          " worker threads, above the memory limit of " + format_bytes(limit) + "; valid: " + valid +
-                         ", or fewer threads (--threads) or replicas (--replicas), or a higher limit with " +
+                         ", or fewer reference replicas (--replicas), or a higher limit with " +
                          kMemoryLimitVariable + "=<GiB> on a machine that has the memory");
 }
 

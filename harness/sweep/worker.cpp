@@ -200,7 +200,7 @@ ChildResult SweepWorker::run(const std::vector<std::string>& argv, const std::st
                 result.timed_out = true;
                 return result;
             }
-            wait_ms = static_cast<int>(std::ceil(left * 1000.0));
+            wait_ms = static_cast<int>(std::min(std::ceil(left * 1000.0), 2.0e9));   // poll takes an int
         }
         pollfd p{socket_, POLLIN, 0};
         const int ready = poll(&p, 1, wait_ms);

@@ -114,6 +114,7 @@ double RayBeam::radiance(const glm::dvec3& w, double s_max, int samples, BeamCou
             if (y < ys - 1e-9 * (1.0 + std::abs(ys)) || y > ye) continue;
             const glm::dvec3 dl = b0 * dp_[0] + b1 * dp_[1] + b2 * dp_[2];
             const double stretch = std::sqrt(glm::dot(dl, dl));
+            if (!(stretch > 0.0)) continue;   // a degenerate section carries nothing (as the pointwise form)
             const double weight = b0 * w_[0] + b1 * w_[1] + b2 * w_[2];
             double a = std::abs(0.5 * a2);
             if (a < a_min_) {
