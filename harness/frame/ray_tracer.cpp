@@ -130,7 +130,6 @@ struct RawHit {
     float u, v, ng_x, ng_y, ng_z, tfar;
 };
 
-float to_tfar(double tmax) { return tmax >= 3e38 ? std::numeric_limits<float>::infinity() : static_cast<float>(tmax); }
 
 }  // namespace
 
@@ -229,7 +228,7 @@ Hit RayTracer::intersect(const glm::dvec3& origin, const glm::dvec3& dir, double
     rh.ray.dir_y = static_cast<float>(dir.y);
     rh.ray.dir_z = static_cast<float>(dir.z);
     rh.ray.tnear = static_cast<float>(tmin);
-    rh.ray.tfar = to_tfar(tmax);
+    rh.ray.tfar = embree_tfar(tmax);
     rh.ray.time = 0.0f;
     rh.ray.mask = 0xFFFFFFFFu;
     rh.ray.id = 0;
@@ -311,7 +310,7 @@ bool RayTracer::occluded(const glm::dvec3& origin, const glm::dvec3& dir, double
     ray.dir_y = static_cast<float>(dir.y);
     ray.dir_z = static_cast<float>(dir.z);
     ray.tnear = static_cast<float>(tmin);
-    ray.tfar = to_tfar(tmax);
+    ray.tfar = embree_tfar(tmax);
     ray.time = 0.0f;
     ray.mask = 0xFFFFFFFFu;
     ray.id = 0;
@@ -332,7 +331,7 @@ void set_lane(RTCRay16& p, int k, const RayQuery& q, double tmin) {
     p.dir_y[k] = static_cast<float>(q.dir.y);
     p.dir_z[k] = static_cast<float>(q.dir.z);
     p.tnear[k] = static_cast<float>(tmin);
-    p.tfar[k] = to_tfar(q.tmax);
+    p.tfar[k] = embree_tfar(q.tmax);
     p.time[k] = 0.0f;
     p.mask[k] = 0xFFFFFFFFu;
     p.id[k] = 0;

@@ -5,6 +5,7 @@
 // side as the geometric normal's outward orientation.
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <memory>
 
 #include <glm/glm.hpp>
@@ -12,6 +13,12 @@
 #include <caustics/frame/frame.hpp>
 
 namespace caustics {
+
+// A query's far end as Embree takes it: single precision, and +inf for "unbounded" (tmax >= 3e38, where
+// the float conversion would overflow). The reference's ray log records it the same way.
+inline float embree_tfar(double tmax) {
+    return tmax >= 3e38 ? std::numeric_limits<float>::infinity() : static_cast<float>(tmax);
+}
 
 struct Hit {
     bool valid = false;

@@ -10,7 +10,6 @@
 namespace caustics::adaptive_beams {
 namespace {
 
-double cross2(const glm::dvec2& a, const glm::dvec2& b) { return a.x * b.y - a.y * b.x; }
 
 // Barycentric coordinates of in-plane point q in the cross-section at y; false when A is exactly zero.
 bool barycentric(const Beam& b, const glm::dvec2& q, double y, std::array<double, 3>& bary, double& area) {
@@ -193,8 +192,7 @@ double volume_radiance_pointwise(const Beam& b, const MediumCoefficients& medium
     int nc = 0;
     cand[nc++] = s_lo;
     double A0 = 0, A1 = 0, A2 = 0;
-    const int pairs[3][2] = {{1, 2}, {2, 0}, {0, 1}};
-    for (const auto& pr : pairs) {
+    for (const auto& pr : kSidePairs) {
         const int j = pr[0], l = pr[1];
         const glm::dvec2 a = b.p[j] + yo * b.g[j] - q0, bb = yw * b.g[j] - qw;
         const glm::dvec2 c = b.p[l] + yo * b.g[l] - q0, d = yw * b.g[l] - qw;

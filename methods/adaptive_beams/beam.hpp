@@ -22,6 +22,12 @@
 
 namespace caustics::adaptive_beams {
 
+// z of the cross product of two plane vectors: twice the signed area of the triangle they span.
+inline double cross2(const glm::dvec2& a, const glm::dvec2& b) { return a.x * b.y - a.y * b.x; }
+
+// The sides of a beam's triangular section: side k joins corners kSidePairs[k] (opposite corner k).
+inline constexpr int kSidePairs[3][2] = {{1, 2}, {2, 0}, {0, 1}};
+
 struct EdgeRay {
     glm::dvec3 start{0.0};   // where the light leaves the specular surface
     glm::dvec3 dir{0.0};     // unit direction it travels in

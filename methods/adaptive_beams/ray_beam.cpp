@@ -7,14 +7,6 @@
 #include <cmath>
 
 namespace caustics::adaptive_beams {
-namespace {
-
-double cross2(const glm::dvec2& a, const glm::dvec2& b) { return a.x * b.y - a.y * b.x; }
-
-
-constexpr int kPairs[3][2] = {{1, 2}, {2, 0}, {0, 1}};   // side k joins corners j, l (opposite corner k)
-
-}  // namespace
 
 RayBeam::RayBeam(const Beam& b, const glm::dvec3& o, const MediumCoefficients& medium)
     : n_(b.n), e1_(b.e1), e2_(b.e2), y0_(b.y0), y1_(b.y1), dp_{b.dp[0], b.dp[1], b.dp[2]},
@@ -28,7 +20,7 @@ RayBeam::RayBeam(const Beam& b, const glm::dvec3& o, const MediumCoefficients& m
     glm::dvec2 a[3];
     for (int i = 0; i < 3; ++i) a[i] = b.p[i] + yo_ * b.g[i] - q0;
     for (int k = 0; k < 3; ++k) {
-        const int j = kPairs[k][0], l = kPairs[k][1];
+        const int j = kSidePairs[k][0], l = kSidePairs[k][1];
         f0_[k] = cross2(a[j], a[l]);
         k1_[k] = cross2(a[j], b.g[l]) + cross2(b.g[j], a[l]);
         c1_[k] = a[l] - a[j];

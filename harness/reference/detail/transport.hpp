@@ -56,7 +56,7 @@ struct RayRecorder {
         RecordedRay r;
         for (int i = 0; i < 3; ++i) r.origin[i] = static_cast<float>(o[i]), r.dir[i] = static_cast<float>(d[i]);
         r.tnear = static_cast<float>(std::max(tmin, offset));
-        r.tfar = tmax >= 3e38 ? std::numeric_limits<float>::infinity() : static_cast<float>(tmax);
+        r.tfar = embree_tfar(tmax);   // as the tracer sends it
         r.shadow = shadow;
         r.segment = 0;   // set per photon by record_reference_rays
         rays.push_back(r);
