@@ -50,7 +50,9 @@ TEST(ViewParamModel, WidgetsOfEveryRegisteredMethodRespectTheirRanges) {
                 EXPECT_GE(w.lo, spec.min);
                 EXPECT_LE(w.hi, spec.max);
                 EXPECT_LE(w.lo, w.hi);
-                if (w.logarithmic) EXPECT_GT(w.lo, 0.0);
+                if (w.logarithmic) {
+                    EXPECT_GT(w.lo, 0.0);
+                }
                 EXPECT_GE(numeric(w), w.lo);
                 EXPECT_LE(numeric(w), w.hi);
                 EXPECT_EQ(w.declared_unbounded, !std::isfinite(spec.min) || !std::isfinite(spec.max));
@@ -63,7 +65,9 @@ TEST(ViewParamModel, WidgetsOfEveryRegisteredMethodRespectTheirRanges) {
                     EXPECT_LE(numeric(now), std::min(w.hi, spec.max));
                     EXPECT_NO_THROW(ParamSet::resolve(info->name, info->params, pm.params().values()));
                 }
-                if (w.kind == WidgetKind::FloatSlider) EXPECT_FALSE(pm.set_float(i, std::numeric_limits<double>::quiet_NaN()));
+                if (w.kind == WidgetKind::FloatSlider) {
+                    EXPECT_FALSE(pm.set_float(i, std::numeric_limits<double>::quiet_NaN()));
+                }
                 EXPECT_THROW(pm.set_text(spec.name, "not-a-number"), InputError);
                 break;
             }
@@ -162,7 +166,9 @@ TEST(ViewSession, PanesReadoutAndRecordOnSine) {
     view::Session s(o);
     ASSERT_FALSE(s.method_name().empty());
     for (const view::MethodChoice& c : s.methods())
-        if (c.name == s.method_name()) EXPECT_TRUE(c.supported);
+        if (c.name == s.method_name()) {
+            EXPECT_TRUE(c.supported);
+        }
     s.render();
     ASSERT_TRUE(s.rendered());
     EXPECT_GT(s.timing().median_frame_ms, 0.0);

@@ -8,18 +8,14 @@
 #include <vector>
 
 #include "command.hpp"
-#include "usage_errors.hpp"
+#include "dispatch.hpp"
+#include "options.hpp"
 #include <caustics/run/render_run.hpp>
 #include <caustics/sweep/worker.hpp>
 #include <caustics/util/errors.hpp>
 
 namespace caustics::cli {
 namespace {
-
-int report(const std::string& message, int code) {
-    std::cerr << "caustics: error: " << message << "\n";
-    return code;
-}
 
 const Command& render_command() {
     static const Command command = [] {
@@ -31,33 +27,25 @@ const Command& render_command() {
 }
 
 // One run: `argv` parsed by a fresh `render` command exactly as main() parses a `caustics render` command
-// line, and its errors reported in main()'s words and exit codes (2 bad input, 1 internal failure).
+// line (dispatch.hpp: the same error lines and exit codes, 2 bad input, 1 internal failure). The options'
+// "valid" texts are forgotten with the parser, whose options they are keyed by.
 int render_one(const std::vector<std::string>& argv) {
+    struct ForgetValidTexts {
+        ~ForgetValidTexts() { forget_valid_texts(); }
+    } forget;   // destroyed after the parser below
     try {
         CLI::App app{"", "caustics"};
         app.require_subcommand(1, 1);
         const Command& command = render_command();
         CLI::App* sub = app.add_subcommand(command.name, command.summary);
-        const std::function<int()> action = command.setup(*sub);
+        const std::vector<ParsedCommand> commands = {{sub, command.setup(*sub)}};
         std::vector<const char*> args = {"caustics"};
         for (const std::string& a : argv) args.push_back(a.c_str());
-        try {
-            app.parse(static_cast<int>(args.size()), args.data());
-        } catch (const CLI::ParseError& e) {
-            if (auto unknown = unknown_argument_message(app)) return report(*unknown, 2);
-            return report(usage_error_message(app, e), 2);
-        } catch (const InputError&) {
-            if (auto unknown = unknown_argument_message(app)) return report(*unknown, 2);
-            throw;
-        }
-        if (!sub->parsed()) return report("sweep-worker: the request is not a render command line", 2);
-        return action();
-    } catch (const InputError& e) {
-        return report(e.what(), 2);
+        return parse_and_run(app, commands, static_cast<int>(args.size()), args.data());
+    } catch (const InputError& e) {   // setting the command up
+        return report_error(e.what(), 2);
     } catch (const std::exception& e) {
-        return report(std::string("internal failure: ") + e.what(), 1);
-    } catch (...) {
-        return report("internal failure: unknown exception", 1);
+        return report_error(std::string("internal failure: ") + e.what(), 1);
     }
 }
 

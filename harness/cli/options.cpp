@@ -129,6 +129,8 @@ std::string valid_text(const CLI::Option* option) {
 
 void set_valid_text(CLI::Option* option, std::function<std::string()> text) { valid_texts()[option] = std::move(text); }
 
+void forget_valid_texts() { valid_texts().clear(); }
+
 std::string integer_range_text(std::int64_t lo, std::int64_t hi, const std::string& note) {
     return "an integer from " + human_integer(lo) + " to " + human_integer(hi) + (note.empty() ? "" : " (" + note + ")");
 }

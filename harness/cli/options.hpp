@@ -22,6 +22,9 @@ namespace caustics::cli {
 // The "valid" text recorded for an option ("" if none).
 std::string valid_text(const CLI::Option* option);
 void set_valid_text(CLI::Option* option, std::function<std::string()> text);
+// Forgets every option's text: for a process that builds parser after parser (the sweep worker), whose
+// options' addresses are the keys and can be reused by the next parser's options.
+void forget_valid_texts();
 
 // "an integer from 1000 to 100000000000 (1e11)", with `note` in parentheses after it when given.
 std::string integer_range_text(std::int64_t lo, std::int64_t hi, const std::string& note = "");

@@ -22,6 +22,7 @@
 #include <caustics/sweep/worker.hpp>
 
 #include "detail/sweep_files.hpp"
+#include "detail/sweep_plan.hpp"
 
 namespace caustics {
 namespace fs = std::filesystem;
@@ -85,125 +86,6 @@ std::string number_text(double v) {
     char buf[40];
     std::snprintf(buf, sizeof buf, "%.17g", v);
     return buf;
-}
-
-// ----- The plan a sweep folder records (manifest.json "plan", "plan_hash") -----
-
-constexpr int kPlanVersion = 1;
-
-// An axis value's canonical text as JSON (a number or boolean where it reads as one), for readable plans.
-json value_json(const std::string& canonical) {
-    const json v = json::parse(canonical, nullptr, false);
-    return v.is_discarded() || !v.is_primitive() || v.is_null() ? json(canonical) : v;
-}
-
-// The scene file's bytes and every asset's bytes: an edited scene is another plan.
-std::string scene_content_hash(const Scene& scene) {
-    Hash128 h;
-    hash_scene_contents(h, scene);
-    return h.hex();
-}
-
-// Everything that decides what a run measures and against what: per scene (by name) its file contents,
-// frames, reference noise target and truth; the reference settings; the timing protocol (with the
-// per-run time limit and threads in effect); every method's axis values; and the runs themselves (count
-// and a hash of every run's id, scene, frame, method and parameters). Not the description, the report
-// settings, the spec's file name or folder, the cache folder: those may change on --resume.
-json sweep_plan(const SweepSpec& spec, const std::vector<PlannedRun>& runs, const std::vector<std::string>& scene_hashes,
-                int threads, double timeout_s) {
-    json plan;
-    plan["version"] = kPlanVersion;
-    json scenes = json::object();
-    for (std::size_t i = 0; i < spec.scenes.size(); ++i) {
-        const SweepScene& scene = spec.scenes[i];
-        scenes[fs::path(scene.path).stem().string()] = {
-            {"file_hash", scene_hashes[i]},
-            {"frames", scene.frames},
-            {"noise_target", scene.noise_target >= 0.0 ? scene.noise_target : spec.reference.noise_target},
-            {"truth", scene.truth.empty() ? spec.truth : scene.truth}};
-    }
-    plan["scenes"] = scenes;
-    const ReferenceSettings& r = spec.reference;
-    plan["reference"] = {{"photons", r.photons}, {"seed", r.seed}, {"photon_cap", r.photon_cap},
-                         {"sampler", sampler_name(r.sampler)}, {"replicas", r.replicas}};
-    plan["timing"] = {{"warmup", spec.warmup}, {"repeats", spec.repeats}, {"precision", spec.timing_precision},
-                      {"max_time_s", spec.timing_max_s}, {"timeout_s", timeout_s}, {"threads", threads}};
-    json methods = json::object();
-    for (const auto& m : spec.methods) {
-        json axes = json::object();
-        for (const auto& a : m.axes) {
-            json values = json::array();
-            for (const auto& v : a.values) values.push_back(value_json(v));
-            axes[a.name] = values;
-        }
-        methods[m.method] = axes;
-    }
-    plan["methods"] = methods;
-    Hash128 h;
-    for (const PlannedRun& run : runs) {
-        h.text(run.id);
-        h.text(run.scene_name);
-        h.u64(static_cast<std::uint64_t>(run.frame));
-        h.text(run.method);
-        h.u64(run.params.size());
-        for (const auto& [k, v] : run.params) {
-            h.text(k);
-            h.text(v);
-        }
-        h.f64(run.noise_target);
-        h.text(run.truth);
-    }
-    plan["runs"] = {{"count", runs.size()}, {"hash", h.hex()}};
-    return plan;
-}
-
-std::string plan_hash(const json& plan) {
-    Hash128 h;
-    h.text(plan.dump());
-    return h.hex();
-}
-
-// For --resume: the folder's manifest when the sweep in it was started with this plan (an empty object
-// when the folder holds no sweep yet); throws InputError naming what differs otherwise, or when the folder
-// holds results whose plan cannot be told. Reads only.
-json check_resume(const fs::path& dir, const json& plan, const SweepSpec& spec) {
-    const fs::path manifest_path = dir / "manifest.json";
-    std::error_code ec;
-    const auto refuse = [&](const std::string& why) {
-        return InputError("--resume", dir.string(), why + "; resume with the spec (and --axis, --threads, --timeout) "
-                                                          "it was started with, or choose another --out folder");
-    };
-    if (!fs::exists(manifest_path, ec)) {
-        if (fs::exists(dir / "results.jsonl", ec))
-            throw refuse("the folder holds results.jsonl but no manifest.json, so the plan its rows were measured "
-                         "with cannot be checked");
-        return json::object();
-    }
-    std::ifstream in(manifest_path, std::ios::binary);
-    const json manifest = json::parse(in, nullptr, false);
-    if (manifest.is_discarded() || !manifest.is_object())
-        throw refuse("manifest.json is not readable JSON, so the plan the sweep was started with cannot be checked");
-    std::vector<std::string> diff;
-    if (manifest.contains("plan")) {
-        json was = manifest["plan"], current = plan;
-        const json was_runs = was.value("runs", json()), now_runs = current.value("runs", json());
-        was.erase("runs");
-        current.erase("runs");
-        differences(was, current, "", diff);
-        if (diff.empty()) differences(was_runs, now_runs, "runs", diff);   // derived: named only alone
-    } else if (manifest.contains("spec")) {
-        // A folder from before plans were recorded: the spec as run must be the same.
-        json was = manifest["spec"], current = spec.as_run;
-        for (const char* free : {"description", "report"}) {
-            if (was.is_object()) was.erase(free);
-            if (current.is_object()) current.erase(free);
-        }
-        differences(was, current, "spec", diff);
-    } else {
-        throw refuse("manifest.json records neither the plan nor the spec the sweep was started with");
-    }
-    if (!diff.empty()) throw refuse("the sweep in this folder was started with another plan: " + listed(diff));
-    return manifest;
 }
 
 // The reference the run's children will ask for, so the parent's computation fills their cache entry.
@@ -420,13 +302,13 @@ SweepSummary run_sweep(const SweepOptions& options) {
         throw InputError("--out", options.out_dir, "already holds a sweep; pass --resume to continue it or choose another folder");
     // Every scene must load before anything runs: a malformed scene is bad input of the whole sweep.
     std::vector<std::string> scene_hashes;
-    for (const auto& scene : spec.scenes) scene_hashes.push_back(scene_content_hash(load_scene(scene.path)));
+    for (const auto& scene : spec.scenes) scene_hashes.push_back(sweep_plan::scene_content_hash(load_scene(scene.path)));
     const double timeout = options.timeout_s > 0.0 ? options.timeout_s : spec.timeout_s;
-    const json plan = sweep_plan(spec, runs, scene_hashes, options.threads, timeout);
+    const json plan = sweep_plan::sweep_plan(spec, runs, scene_hashes, options.threads, timeout);
 
     // A resumed sweep must continue the plan it was started with: checked before any file is written.
     if (options.references_only) return compute_references(spec, runs, options);
-    json manifest = options.resume ? check_resume(dir, plan, spec) : json::object();
+    json manifest = options.resume ? sweep_plan::check_resume(dir, plan, spec) : json::object();
     const json shard = options.shard.active() ? shard_record(options.shard, runs, positions) : json();
     if (!manifest.empty() && manifest.value("shard", json()) != shard)
         throw InputError("--resume", dir.string(),
@@ -447,7 +329,7 @@ SweepSummary run_sweep(const SweepOptions& options) {
         manifest["resumed"].push_back(resumed);
     }
     manifest["plan"] = plan;
-    manifest["plan_hash"] = plan_hash(plan);
+    manifest["plan_hash"] = sweep_plan::plan_hash(plan);
     if (options.shard.active()) {
         manifest["shard"] = shard;
         manifest["csv_params"] = csv_param_names(spec);

@@ -12,6 +12,8 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <stdexcept>
 #include <thread>
@@ -37,21 +39,53 @@ bool send_all(int fd, const std::string& text) {
     return true;
 }
 
-// The next line of `fd` (without its newline) into `line`, reading into `pending`; false at EOF.
-bool read_line(int fd, std::string& pending, std::string& line) {
+// One read of `fd` appended to `pending` (retried on EINTR); false at EOF or on an error.
+bool read_more(int fd, std::string& pending) {
+    char buf[4096];
     while (true) {
-        const std::size_t end = pending.find('\n');
-        if (end != std::string::npos) {
-            line = pending.substr(0, end);
-            pending.erase(0, end + 1);
-            return true;
-        }
-        char buf[4096];
         const ssize_t n = read(fd, buf, sizeof buf);
         if (n < 0 && errno == EINTR) continue;
         if (n <= 0) return false;
         pending.append(buf, static_cast<std::size_t>(n));
+        return true;
     }
+}
+
+// Moves the first complete line of `pending` (without its newline) into `line`; false if there is none.
+bool take_line(std::string& pending, std::string& line) {
+    const std::size_t end = pending.find('\n');
+    if (end == std::string::npos) return false;
+    line = pending.substr(0, end);
+    pending.erase(0, end + 1);
+    return true;
+}
+
+// The next line of `fd` into `line`, reading into `pending`; false at EOF.
+bool read_line(int fd, std::string& pending, std::string& line) {
+    while (!take_line(pending, line))
+        if (!read_more(fd, pending)) return false;
+    return true;
+}
+
+// fork() for a child that must not outlive this process: in the child (0 returned), optionally its own
+// process group, then PR_SET_PDEATHSIG, and an exit if this process died before that took effect. Only
+// async-signal-safe calls happen in the child (the caller's process may have threads); the caller's
+// child branch goes on to exec.
+pid_t fork_tied_child(bool own_group) {
+    const pid_t parent = getpid();
+    const pid_t pid = fork();
+    if (pid == 0) {
+        if (own_group) setpgid(0, 0);
+        if (prctl(PR_SET_PDEATHSIG, SIGKILL) != 0) _exit(127);
+        if (getppid() != parent) _exit(127);
+    }
+    return pid;
+}
+
+// Whether process `pid` has ended (it stays unreaped).
+bool has_ended(pid_t pid) {
+    siginfo_t info{};
+    return waitid(P_PID, static_cast<id_t>(pid), &info, WEXITED | WNOHANG | WNOWAIT) == 0 && info.si_pid == pid;
 }
 
 void flush_output() {
@@ -66,12 +100,9 @@ ChildResult run_child(const std::vector<std::string>& argv, const std::string& l
     std::vector<char*> args;
     for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
     args.push_back(nullptr);
-    const pid_t parent = getpid();
-    const pid_t pid = fork();
+    const pid_t pid = fork_tied_child(false);
     if (pid < 0) throw std::runtime_error("sweep: fork failed");
     if (pid == 0) {
-        if (prctl(PR_SET_PDEATHSIG, SIGKILL) != 0) _exit(127);
-        if (getppid() != parent) _exit(127);   // the parent died before prctl took effect
         const int fd = open(log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
         if (fd >= 0) {
             dup2(fd, STDOUT_FILENO);
@@ -112,8 +143,7 @@ SweepWorker::~SweepWorker() {
     const auto deadline = Clock::now() + std::chrono::seconds(5);
     bool ended = false;
     while (!ended && Clock::now() < deadline) {
-        siginfo_t info{};
-        ended = waitid(P_PID, static_cast<id_t>(pid_), &info, WEXITED | WNOHANG | WNOWAIT) == 0 && info.si_pid == pid_;
+        ended = has_ended(pid_);
         if (!ended) std::this_thread::sleep_for(std::chrono::milliseconds(5));
     }
     int status = 0;
@@ -127,17 +157,14 @@ void SweepWorker::start() {
     // and exec, as the sweep's process may have threads.
     const std::string mode = "sweep-worker";
     char* const args[] = {const_cast<char*>(program_.c_str()), const_cast<char*>(mode.c_str()), nullptr};
-    const pid_t parent = getpid();
-    const pid_t pid = fork();
+    // Its own process group, so that a timeout kills whatever it started too.
+    const pid_t pid = fork_tied_child(true);
     if (pid < 0) {
         close(sv[0]);
         close(sv[1]);
         throw std::runtime_error("sweep: fork failed");
     }
     if (pid == 0) {
-        setpgid(0, 0);   // its own process group, so that a timeout kills whatever it started too
-        if (prctl(PR_SET_PDEATHSIG, SIGKILL) != 0) _exit(127);
-        if (getppid() != parent) _exit(127);   // the parent died before prctl took effect
         dup2(sv[1], STDIN_FILENO);             // dup2 clears close-on-exec on the copies
         dup2(sv[1], STDOUT_FILENO);
         execv(args[0], args);
@@ -178,11 +205,27 @@ ChildResult SweepWorker::run(const std::vector<std::string>& argv, const std::st
         if (!send_all(socket_, request)) throw std::runtime_error("sweep: a new worker does not take requests");
     }
     ChildResult result;
+    // The worker's end: its status as a per-run child's would be. A worker that exited without answering
+    // (it could not read the request, or lost its descriptors) leaves a line in the run's log when the run
+    // wrote none, so that the sweep quotes a reason after the exit code.
+    auto ended = [&](bool timed_out) {
+        int status = 0;
+        stop(timed_out, &status);
+        result.timed_out = timed_out;
+        if (timed_out) return result;
+        if (WIFSIGNALED(status)) result.signal = WTERMSIG(status);
+        if (!WIFEXITED(status)) return result;
+        result.exit_code = WEXITSTATUS(status);
+        std::error_code ec;
+        if (!std::filesystem::exists(log_path, ec) || std::filesystem::file_size(log_path, ec) == 0)
+            std::ofstream(log_path, std::ios::app) << "caustics: error: the sweep worker exited (status "
+                                                   << result.exit_code << ") without answering for this run\n";
+        return result;
+    };
+    std::string line;
     while (true) {
-        const std::size_t end = pending_.find('\n');
-        if (end != std::string::npos) {
-            const json reply = json::parse(pending_.substr(0, end), nullptr, false);
-            pending_.erase(0, end + 1);
+        if (take_line(pending_, line)) {
+            const json reply = json::parse(line, nullptr, false);
             if (reply.is_object() && reply.contains("exit") && reply["exit"].is_number_integer()) {
                 result.exit_code = reply["exit"].get<int>();
                 return result;
@@ -191,34 +234,26 @@ ChildResult SweepWorker::run(const std::vector<std::string>& argv, const std::st
             stop(true, &status);
             throw std::runtime_error("sweep: unreadable answer from the worker");
         }
-        int wait_ms = -1;
+        // Waits in slices of at most a second: EOF on the socket is not the only sign of a dead worker,
+        // since a process it started and that outlived it may still hold the socket open.
+        int wait_ms = 1000;
         if (timeout_s > 0.0) {
             const double left = timeout_s - std::chrono::duration<double>(Clock::now() - started).count();
-            if (left <= 0.0) {
-                int status = 0;
-                stop(true, &status);
-                result.timed_out = true;
-                return result;
-            }
-            wait_ms = static_cast<int>(std::min(std::ceil(left * 1000.0), 2.0e9));   // poll takes an int
+            if (left <= 0.0) return ended(true);
+            wait_ms = static_cast<int>(std::min(std::ceil(left * 1000.0), 1000.0));
         }
         pollfd p{socket_, POLLIN, 0};
         const int ready = poll(&p, 1, wait_ms);
         if (ready < 0 && errno != EINTR) throw std::runtime_error("sweep: poll failed");
-        if (ready <= 0) continue;
-        char buf[4096];
-        const ssize_t n = read(socket_, buf, sizeof buf);
-        if (n < 0 && errno == EINTR) continue;
-        if (n > 0) {
-            pending_.append(buf, static_cast<std::size_t>(n));
-            continue;
+        if (ready > 0) {
+            // EOF (or a broken socket): the worker died during the run. Its status says how.
+            if (!read_more(socket_, pending_)) return ended(false);
+        } else if (ready == 0 && has_ended(pid_)) {
+            // Dead with its socket still open elsewhere: whatever it wrote before it died is read first.
+            pollfd q{socket_, POLLIN, 0};
+            if (poll(&q, 1, 0) > 0 && read_more(socket_, pending_)) continue;
+            return ended(false);
         }
-        // EOF (or a broken socket): the worker died during the run. Its status says how.
-        int status = 0;
-        stop(false, &status);
-        if (WIFEXITED(status)) result.exit_code = WEXITSTATUS(status);
-        if (WIFSIGNALED(status)) result.signal = WTERMSIG(status);
-        return result;
     }
 }
 

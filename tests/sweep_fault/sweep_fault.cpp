@@ -1,13 +1,17 @@
 // sweep_fault: a method plugin that fails on request, for the sweep's isolation tests
 // (tests/test_sweep_worker.cpp). With fault=none it renders nothing and is ok; with segv it dies of
 // SIGSEGV, with abort of SIGABRT, with hang it never returns: what a broken method does to the process
-// that runs it, in a per-run child or in a sweep worker alike. The fault strikes inside render(), in
+// that runs it, in a per-run child or in a sweep worker alike. fork_segv first starts a process that
+// outlives it by 8 s and holds every descriptor it had (in a worker: the socket to the sweep), then dies
+// of SIGSEGV: the sweep must see the death without waiting for EOF. The fault strikes inside render(), in
 // the timed region, after the scene, the frame and the method's preparation have succeeded.
 #include <chrono>
 #include <csignal>
 #include <cstdlib>
 #include <memory>
 #include <thread>
+
+#include <unistd.h>
 
 #include <caustics/api/method.hpp>
 #include <caustics/api/registry.hpp>
@@ -24,7 +28,11 @@ public:
     Capability capabilities(const Scene&) const override { return Capability::yes(); }
 
     CausticOutput render(const FrameGeometry&, const RenderRequest&) override {
-        if (fault_ == "segv") std::raise(SIGSEGV);
+        if (fault_ == "fork_segv" && fork() == 0) {
+            std::this_thread::sleep_for(std::chrono::seconds(8));
+            _exit(0);
+        }
+        if (fault_ == "segv" || fault_ == "fork_segv") std::raise(SIGSEGV);
         if (fault_ == "abort") std::abort();
         if (fault_ == "hang")
             while (true) std::this_thread::sleep_for(std::chrono::seconds(1));
@@ -42,11 +50,11 @@ private:
 MethodInfo info() {
     MethodInfo m;
     m.name = "sweep_fault";
-    m.doc = "Fails on request (fault=segv|abort|hang), else renders nothing: the sweep's isolation tests";
+    m.doc = "Fails on request (fault=segv|abort|hang|fork_segv), else renders nothing: the sweep's isolation tests";
     m.params = {
         {"grid", ParamType::Int, "1", 1, 1, {}, "no grid (only 1 is valid)"},
         {"iterations", ParamType::Int, "1", 1, 1, {}, "nothing iterates (only 1 is valid)"},
-        {"fault", ParamType::Enum, "none", 0, 0, {"none", "segv", "abort", "hang"}, "how render() fails"},
+        {"fault", ParamType::Enum, "none", 0, 0, {"none", "segv", "abort", "hang", "fork_segv"}, "how render() fails"},
     };
     m.create = [](const ParamSet& p) -> std::unique_ptr<Method> {
         return std::make_unique<SweepFault>(p.get_enum("fault"));
