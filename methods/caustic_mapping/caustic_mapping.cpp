@@ -246,12 +246,12 @@ void CausticMapping::trace(const Scene& scene, const Light& light, Counters& tot
                     // front-to-back distance of this texel (Wyman's d_V).
                     double start = s_.estimator.d0;
                     if (back_tex_.maps[0].id[i] >= 0) start = glm::length(glm::dvec3(back_tex_.maps[0].position[i]) - v);
-                    const EstimateResult e = estimate_intersection(back_tex_, v, dir, s_.estimator, start);
+                    glm::dvec3 ne;   // the back face's normal at the exit point, from the estimate's last lookup
+                    const EstimateResult e = estimate_intersection(back_tex_, v, dir, s_.estimator, start, &ne);
                     c.lookups += e.lookups;
                     c.oscillating += e.oscillating, c.bisection += e.bisected, c.bad_derivative += e.bad_derivative;
                     c.not_converged += !e.converged;
-                    glm::dvec3 q, ne;
-                    if (!e.hit || !back_tex_.fetch(v + e.d * dir, q, &ne)) {
+                    if (!e.hit) {
                         ++c.null_exit;
                         c.nonfinite += e.nonfinite;
                         continue;

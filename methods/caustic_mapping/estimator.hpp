@@ -23,7 +23,9 @@
 //            two-cycle, Sec. III.D). With safeguard=bisection and a sign change of side() between a
 //            point in front and one behind, the estimate switches to bisection on that bracket for the
 //            remaining iterations (at least `bisection_steps`).
-// Like the shader, the result is the stored surface point looked up at the final estimate.
+// Like the shader, the result is the stored surface point looked up at the final estimate; with `normal`
+// (and a Lookup whose fetch(p, q, normal) also interpolates the stored normal), that lookup also gives the
+// normal there (the exit point's normal of double-surface refraction, without a second lookup).
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -61,7 +63,7 @@ struct EstimateResult {
 
 template <class Lookup>
 EstimateResult estimate_intersection(const Lookup& tex, const glm::dvec3& v, const glm::dvec3& r,
-                                     const EstimatorSettings& s, double d_start) {
+                                     const EstimatorSettings& s, double d_start, glm::dvec3* normal = nullptr) {
     EstimateResult out;
     constexpr double inf = std::numeric_limits<double>::infinity();
     double lo = -inf, hi = inf;              // bracket: side(lo) < 0 < side(hi)
@@ -69,10 +71,13 @@ EstimateResult estimate_intersection(const Lookup& tex, const glm::dvec3& v, con
     double prev_step = 0.0;
     bool have_prev = false;
     glm::dvec3 q;
-    auto eval = [&](double dd, glm::dvec3& qq, double& side) -> bool {
+    auto eval = [&](double dd, glm::dvec3& qq, double& side, glm::dvec3* nn = nullptr) -> bool {
         const glm::dvec3 p = v + dd * r;
         ++out.lookups;
-        if (!tex.fetch(p, qq)) return false;
+        bool found;
+        if constexpr (requires { tex.fetch(p, qq, nn); }) found = tex.fetch(p, qq, nn);
+        else found = tex.fetch(p, qq);
+        if (!found) return false;
         if constexpr (requires { tex.side(p, qq); }) side = tex.side(p, qq);
         else side = tex.depth(p) - tex.depth(qq);
         if (side < 0.0) lo = std::max(lo, dd);
@@ -151,7 +156,7 @@ EstimateResult estimate_intersection(const Lookup& tex, const glm::dvec3& v, con
     }
     if (!std::isfinite(d)) return fail(false);
     double side = 0.0;
-    if (!eval(d, q, side)) return fail(true);
+    if (!eval(d, q, side, normal)) return fail(true);
     out.hit = true;
     out.point = q;
     out.d = d;
