@@ -101,11 +101,16 @@ void GBuffer::clear(int w, int h, DepthTest test, bool with_normals) {
     const std::size_t n = static_cast<std::size_t>(w) * h;
     const float far = test == DepthTest::Less ? std::numeric_limits<float>::infinity()
                                               : -std::numeric_limits<float>::infinity();
-    depth.assign(n, far);
+    depth.resize(n);
+    id.resize(n);
     position.resize(n);   // only read where id >= 0: no need to clear
     if (with_normals) normal.resize(n);
     else normal.clear();
-    id.assign(n, -1);
+    // Cleared in parallel: a 768^2 target is 4.7 MB of depth and ids per frame.
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1 << 16), [&](const tbb::blocked_range<std::size_t>& r) {
+        std::fill(depth.begin() + static_cast<std::ptrdiff_t>(r.begin()), depth.begin() + static_cast<std::ptrdiff_t>(r.end()), far);
+        std::fill(id.begin() + static_cast<std::ptrdiff_t>(r.begin()), id.begin() + static_cast<std::ptrdiff_t>(r.end()), -1);
+    });
 }
 
 struct GBufferRaster::Impl {
