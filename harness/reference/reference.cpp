@@ -120,19 +120,21 @@ Transport make_transport(const RayTracer& tracer, const ReceiverChart& chart, co
             throw std::runtime_error("reference: camera G-buffer size differs from the scene camera");
         transport.camera = camera_model.get();
         transport.gbuffer = camera;
-        transport.pixel_scale.assign(camera->covered.size(), 0.0);
-        for (std::size_t i = 0; i < camera->covered.size(); ++i) {
-            if (!camera->covered[i]) continue;
-            const glm::dvec3 to_cam = camera_model->position - glm::dvec3(camera->position[i]);
-            const double d2 = glm::dot(to_cam, to_cam);
-            const double cos_c = d2 > 0.0 ? glm::dot(glm::dvec3(camera->normal[i]), to_cam) / std::sqrt(d2) : 1.0;
-            transport.pixel_scale[i] = std::max(d2, 1e-12) / std::clamp(cos_c, 0.05, 1.0);
-        }
+        // Pixels in parallel (each its own computation): a 1024 x 768 view's table is built per run.
         transport.pixel_info.resize(camera->covered.size());
-        for (std::size_t i = 0; i < camera->covered.size(); ++i) {
-            if (!camera->covered[i] || camera->object[i] < 0) continue;
-            transport.pixel_info[i] = {transport.pixel_scale[i], camera->object[i]};
-        }
+        const glm::dvec3 eye = camera_model->position;
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, camera->covered.size(), 16384),
+                          [&](const tbb::blocked_range<std::size_t>& range) {
+                              for (std::size_t i = range.begin(); i < range.end(); ++i) {
+                                  if (!camera->covered[i]) continue;
+                                  const glm::dvec3 to_cam = eye - glm::dvec3(camera->position[i]);
+                                  const double d2 = glm::dot(to_cam, to_cam);
+                                  const double cos_c =
+                                      d2 > 0.0 ? glm::dot(glm::dvec3(camera->normal[i]), to_cam) / std::sqrt(d2) : 1.0;
+                                  transport.pixel_info[i] = {std::max(d2, 1e-12) / std::clamp(cos_c, 0.05, 1.0),
+                                                             camera->object[i]};
+                              }
+                          });
     }
     detail::setup_media(transport, scene, camera_view && scene_scatters(scene));
     return transport;
@@ -184,11 +186,19 @@ void trace_photons(const Transport& transport, ReferenceSums& sums, std::uint64_
 // Mean, standard error and per-replica images of one view from its replica sums; `area(k)` is the
 // measure that turns a sum into irradiance (0: not measured).
 template <class Area>
-void estimate_view(const std::vector<std::int64_t>& sums, std::size_t count, std::uint32_t replicas, double unit,
+void estimate_view(const SumVector& sums, std::size_t count, std::uint32_t replicas, double unit,
                    int width, int height, Area area, Image& mean, Image& stderr_image, std::vector<Image>& per_replica) {
-    mean = Image(width, height, 1);
-    stderr_image = Image(width, height, 1);
-    per_replica.assign(replicas, Image(width, height, 1));
+    // The 2 + R images are fresh memory, first touched here: in parallel, on huge pages where they fit.
+    per_replica.assign(replicas, Image());
+    tbb::parallel_for(std::uint32_t{0}, replicas + 2, [&](std::uint32_t i) {
+        Image& image = i == replicas ? mean : i == replicas + 1 ? stderr_image : per_replica[i];
+        image = Image();
+        image.width = width, image.height = height, image.channels = 1;
+        const std::size_t n = static_cast<std::size_t>(width) * height;
+        image.pixels.reserve(n);
+        advise_huge_pages(image.pixels.data(), n * sizeof(float));
+        image.pixels.resize(n, 0.0f);
+    });
     const double r = replicas;
     // Pixels in parallel (each is its own computation: the same bits for any thread count). A pixel no
     // replica deposited in keeps its zeros without its measure being computed (four atan per camera
@@ -232,7 +242,7 @@ ReferenceResult finish_reference(const Transport& transport, const ReceiverChart
                       [&](std::size_t k) {
                           if (!camera->covered[k]) return 0.0;
                           const int x = static_cast<int>(k % camera->width), y = static_cast<int>(k / camera->width);
-                          return camera_model->pixel_solid_angle(x, y) * transport.pixel_scale[k];
+                          return camera_model->pixel_solid_angle(x, y) * transport.pixel_info[k].scale;
                       },
                       result.camera, result.camera_stderr, result.camera_replicas);
         result.noise_nrmse_camera = nrmse_of(result.camera, result.camera_stderr, &result.camera_covered);

@@ -15,6 +15,7 @@
 #include <caustics/frame/frame.hpp>
 #include <caustics/frame/ray_tracer.hpp>
 #include <caustics/frame/receiver_chart.hpp>
+#include <caustics/reference/huge_pages.hpp>
 #include <caustics/reference/photon_sampler.hpp>
 #include <caustics/reference/photon_source.hpp>
 #include <caustics/reference/reference.hpp>
@@ -127,8 +128,8 @@ struct Transport {
     const ReceiverChart* chart = nullptr;
     const CameraGBuffer* gbuffer = nullptr;
     const CameraModel* camera = nullptr;
-    std::vector<double> pixel_scale;   // camera: d_c^2 / cos_c of each pixel's G-buffer point
-    std::vector<PixelInfo> pixel_info; // camera: pixel_scale and G-buffer object, packed
+    // camera: per pixel, d_c^2 / cos_c of its G-buffer point and its G-buffer object (covered pixels).
+    std::vector<PixelInfo, HugePageAllocator<PixelInfo>> pixel_info;
     std::vector<Emitter> emitters;
     std::vector<double> start_weight;  // q of a photon of each light as it leaves (power / largest power)
     double scale = 1.0;                // the largest light's power [W]: converts q sums to flux
@@ -143,7 +144,7 @@ struct Transport {
     // camera_volume: measured when `volume` (the scene scatters and the camera view is asked).
     bool volume = false;
     int camera_medium = -1;             // CameraGBuffer::medium_object
-    std::vector<double> volume_scale;   // per pixel: s_k [m^2] (reference_volume.cpp)
+    std::vector<double, HugePageAllocator<double>> volume_scale;   // per pixel: s_k [m^2] (reference_volume.cpp)
 
     // Photon i of a replica belongs to light i mod L and is that light's sample i / L.
     PhotonSampler sampler_of(std::uint32_t replica, std::uint64_t i) const {
