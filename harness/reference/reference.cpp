@@ -196,7 +196,7 @@ void estimate_view(const SumVector& sums, std::size_t count, std::uint32_t repli
         image.width = width, image.height = height, image.channels = 1;
         const std::size_t n = static_cast<std::size_t>(width) * height;
         image.pixels.reserve(n);
-        advise_huge_pages(image.pixels.data(), n * sizeof(float));
+        prepare_fresh_memory(image.pixels.data(), n * sizeof(float));
         image.pixels.resize(n, 0.0f);
     });
     const double r = replicas;
@@ -340,10 +340,10 @@ ReferenceResult compute_reference(const RayTracer& tracer, const ReceiverChart& 
     sums->lights = static_cast<std::uint32_t>(scene.lights.size());
     sums->bins = static_cast<std::size_t>(chart.width()) * chart.height();
     sums->pixels = camera_view ? camera->covered.size() : 0;
-    sums->bin_sums.assign(sums->bins * sums->replicas, 0);
-    sums->pixel_sums.assign(sums->pixels * sums->replicas, 0);
+    sums->bin_sums.resize(sums->bins * sums->replicas);   // zeros (HugePageAllocator)
+    sums->pixel_sums.resize(sums->pixels * sums->replicas);   // zeros (HugePageAllocator)
     sums->volume_pixels = transport.volume ? sums->pixels : 0;
-    sums->volume_sums.assign(sums->volume_pixels * sums->replicas, 0);
+    sums->volume_sums.resize(sums->volume_pixels * sums->replicas);   // zeros (HugePageAllocator)
     if (start) {
         if (start->replicas != sums->replicas || start->lights != sums->lights || start->bins != sums->bins ||
             start->pixels != sums->pixels || start->volume_pixels != sums->volume_pixels)
