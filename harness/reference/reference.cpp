@@ -32,6 +32,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <numbers>
 #include <stdexcept>
 
@@ -140,12 +141,39 @@ Transport make_transport(const RayTracer& tracer, const ReceiverChart& chart, co
     return transport;
 }
 
+// One batch's photon order and emission samples (Transport::batch_order).
+struct BatchBuffers {
+    std::vector<std::uint32_t> order, scratch;
+    std::vector<glm::dvec2> emission;
+};
+
+// Batch buffers handed from one batch to the next.
+class BatchPool {
+public:
+    std::unique_ptr<BatchBuffers> take() {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (free_.empty()) return std::make_unique<BatchBuffers>();
+        std::unique_ptr<BatchBuffers> b = std::move(free_.back());
+        free_.pop_back();
+        return b;
+    }
+    void give_back(std::unique_ptr<BatchBuffers> b) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        free_.push_back(std::move(b));
+    }
+
+private:
+    std::mutex mutex_;
+    std::vector<std::unique_ptr<BatchBuffers>> free_;
+};
+
 // Traces indices [from, to) of every replica into `sums` (batches of one replica each, fixed order).
 void trace_photons(const Transport& transport, ReferenceSums& sums, std::uint64_t from, std::uint64_t to,
                    ProgressBar& progress) {
     const std::size_t bins = sums.bins, pixels = sums.pixels, volume_pixels = sums.volume_pixels;
     const std::uint32_t replicas = sums.replicas;
     tbb::enumerable_thread_specific<WaveScratch> waves;
+    BatchPool pool;
     const std::uint64_t per_replica_batches = (to - from + kBatchSize - 1) / kBatchSize;
     const std::uint64_t batches = per_replica_batches * replicas;
     std::vector<FluxLedger> batch_ledgers(batches);
@@ -154,10 +182,12 @@ void trace_photons(const Transport& transport, ReferenceSums& sums, std::uint64_
             const std::uint32_t replica = static_cast<std::uint32_t>(b / per_replica_batches);
             const std::uint64_t first = from + (b % per_replica_batches) * kBatchSize;
             const std::uint64_t last = std::min(to, first + kBatchSize);
-            // Per batch, not per thread: a thread waiting on the chunks below may start another batch.
-            std::vector<std::uint32_t> order, scratch;
-            std::vector<glm::dvec2> emission;
-            transport.batch_order(replica, first, last, order, scratch, emission);
+            // Per batch, not per thread (a thread waiting on the chunks below may start another batch),
+            // from a pool: 2 MB of fresh memory per batch would fault in every time.
+            std::unique_ptr<BatchBuffers> buffers = pool.take();
+            std::vector<std::uint32_t>& order = buffers->order;
+            std::vector<glm::dvec2>& emission = buffers->emission;
+            transport.batch_order(replica, first, last, order, buffers->scratch, emission);
             const std::size_t chunks = (order.size() + kChunkSize - 1) / kChunkSize;
             std::vector<FluxLedger> chunk_ledgers(chunks);
             tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, 1), [&](const tbb::blocked_range<std::size_t>& cr) {
@@ -176,6 +206,7 @@ void trace_photons(const Transport& transport, ReferenceSums& sums, std::uint64_
             FluxLedger ledger;
             for (const FluxLedger& l : chunk_ledgers) add_ledger(ledger, l);
             batch_ledgers[b] = ledger;
+            pool.give_back(std::move(buffers));
             progress.advance(last - first);
         }
     });
