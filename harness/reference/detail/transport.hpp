@@ -88,11 +88,15 @@ struct PhotonState {
     int depth = 0;              // specular events so far
     int inside = -1;            // dielectric object the photon travels in (-1: outside medium)
     std::uint32_t slot = 0;     // its place in the photon order of its chunk (ledger events)
+    double FluxLedger::*end = nullptr;   // where its path ended (the ledger books its final w there)
 };
 
 // One addition to the flux ledger. The ledger is a floating-point sum, so its bits depend on the order of
-// the additions: a wave of photons books events and the chunk replays them in photon order (each
-// photon's own in the order it made them), the order of tracing one photon after another.
+// the additions to each of its fields: in photon order (each photon's own in the order it made them),
+// the order of tracing one photon after another. A wave books every photon's emitted weight as it
+// starts and its end (PhotonState::end, one per photon) as the wave finishes, both in photon order;
+// only the media's absorbed and scattered shares, any number per photon, become events, which the wave
+// replays in photon order.
 struct LedgerEvent {
     std::uint32_t slot;
     double FluxLedger::*field;
@@ -119,6 +123,7 @@ struct WaveScratch {
     std::vector<std::uint8_t> occluded;
     std::vector<LedgerEvent> events, sorted;
     std::vector<std::uint32_t> event_start;
+    std::vector<SamplerSeeds> seeds;
 };
 
 // Everything one photon needs, shared read-only by all threads.
@@ -150,17 +155,19 @@ struct Transport {
     PhotonSampler sampler_of(std::uint32_t replica, std::uint64_t i) const {
         return PhotonSampler(sampler, seed + 0x51ED270B27D5A3C1ull * (i % emitters.size()), replica, i / emitters.size());
     }
+    // The same per light, hashed once: PhotonSampler(seeds[i mod L], i / L) is sampler_of(replica, i).
+    void seeds_of(std::uint32_t replica, std::vector<SamplerSeeds>& seeds) const;
     // The batch's photon order (photon_source.hpp); emission[i - first] receives photon i's sample
     // values of dimensions 0 and 1, which the order is made from and its emission reads.
     void batch_order(std::uint32_t replica, std::uint64_t first, std::uint64_t last, std::vector<std::uint32_t>& order,
                      std::vector<std::uint32_t>& scratch, std::vector<glm::dvec2>& emission) const;
-    // Photon i of a replica as it leaves its light (emission: its dimensions 0 and 1); books its
-    // emitted weight.
-    PhotonState start(std::uint32_t replica, std::uint64_t i, const glm::dvec2& emission, std::uint32_t slot,
-                      std::vector<LedgerEvent>& ledger) const;
+    // Photon i of a replica as it leaves its light (emission: its dimensions 0 and 1; seeds: seeds_of
+    // its replica). The caller books its emitted weight w.
+    PhotonState start(const SamplerSeeds* seeds, std::uint64_t i, const glm::dvec2& emission, std::uint32_t slot) const;
     // Everything one segment does after its closest-hit query `hit`: extinction, the camera_volume
-    // point, the deposit, or the next direction. Ledger additions go to `ledger`, visibility queries to
-    // `shadows` (the caller resolves both). False when the photon's path has ended.
+    // point, the deposit, or the next direction. Media's ledger additions go to `ledger`, visibility
+    // queries to `shadows` (the caller resolves both). False when the photon's path has ended: then
+    // p.end says where the ledger books p.w.
     bool step(PhotonState& p, const Hit& hit, std::vector<LedgerEvent>& ledger, Accumulators& acc,
               std::vector<ShadowQuery>& shadows) const;
     // One photon, one query at a time, each logged (record_reference_rays).
