@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <atomic>
 #include <limits>
+#include <memory>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -193,6 +194,11 @@ inline void apply_shadow(const ShadowQuery& q) {
     if (q.saturating) add_saturating(*q.target, q.increment);
     else add_sum(*q.target, q.increment);
 }
+
+// The result that `sums` hold: estimates, standard errors, replica images and ledger
+// (reference_estimate.cpp). `camera` null: no camera view.
+ReferenceResult finish_reference(const Transport& transport, const ReceiverChart& chart, const CameraGBuffer* camera,
+                                 const CameraModel* camera_model, std::shared_ptr<const ReferenceSums> sums);
 
 // The media and, when `volume`, the camera_volume set-up of `transport` (reference_volume.cpp).
 void setup_media(Transport& transport, const Scene& scene, bool volume);
