@@ -49,7 +49,7 @@ void free_zeroed(void* p, std::size_t bytes) {
 }
 
 void prepare_fresh_memory(void* p, std::size_t bytes) {
-    if (bytes < kHugeThreshold) return;
+    if (bytes < (std::size_t{64} << 10)) return;   // a few pages: not worth the calls
     const auto start = reinterpret_cast<std::uintptr_t>(p);
     const std::uintptr_t first = round_up(start, kHugePage);
     const std::uintptr_t last = (start + bytes) / kHugePage * kHugePage;

@@ -80,7 +80,9 @@ ReferenceResult finish_reference(const Transport& transport, const ReceiverChart
                   result.receiver, result.receiver_stderr, result.receiver_replicas);
     result.noise_nrmse = nrmse_of(result.receiver, result.receiver_stderr, nullptr);
     if (camera && sums->pixels > 0) {
-        result.camera_covered = camera->covered;
+        result.camera_covered.reserve(camera->covered.size());
+        prepare_fresh_memory(result.camera_covered.data(), camera->covered.size());
+        result.camera_covered.assign(camera->covered.begin(), camera->covered.end());
         // E_pix = sum w / A_dep = (unit / A_c) sum x with A_c = omega * pixel_scale.
         estimate_view(sums->pixel_sums, sums->pixels, sums->replicas, unit, camera->width, camera->height,
                       [&](std::size_t k) {
