@@ -8,8 +8,9 @@
 //
 // Same bits as tracing one photon after another: every photon reads the same sample values and takes
 // the same path (the batched queries return exactly the single-ray hits, tests/test_reference_bits.cpp);
-// deposits are integer sums, whose order does not matter; and the flux ledger, a floating-point sum, is
-// replayed from the wave's events in photon order, each photon's events in the order it made them.
+// deposits are integer sums, whose order does not matter; and each field of the flux ledger, a
+// floating-point sum, receives its additions in photon order, each photon's in the order it made them
+// (LedgerEvent, detail/transport.hpp).
 #include "detail/transport.hpp"
 
 #include <algorithm>
