@@ -398,7 +398,7 @@ TEST(RayTracerGuard, InvalidRayThrowsInsteadOfAborting) {
 TEST(MemoryEstimate, PerBinAndPerPixelTerms) {
     // R = 8, T = 2: trace 8 R (1 + T) = 192, finish 8 R + 2 (8 + 4 R) = 144, store 8 R + 8 + 4 R + 16 R = 232.
     EXPECT_DOUBLE_EQ(caustics::reference_bytes_per_bin(8, 2), 8.0 + 232.0 + 16.0);
-    EXPECT_DOUBLE_EQ(caustics::reference_bytes_per_pixel(8, 2), 29.0 + 24.0 + 1.0 + 232.0 + 24.0);
+    EXPECT_DOUBLE_EQ(caustics::reference_bytes_per_pixel(8, 2), 29.0 + 16.0 + 1.0 + 232.0 + 24.0);
     // The threads deposit atomically into one copy of the sums: the estimate does not grow with them.
     EXPECT_DOUBLE_EQ(caustics::reference_bytes_per_bin(8, 16), caustics::reference_bytes_per_bin(8, 2));
     EXPECT_DOUBLE_EQ(caustics::reference_bytes_per_pixel(8, 64), caustics::reference_bytes_per_pixel(8, 2));

@@ -80,12 +80,35 @@ std::uint32_t sobol_dim1(std::uint32_t index) { return sobol_dim1_loop(index); }
 // R(h), h = H(R(index), s1): the even dimension's point R(R(h)) = h scrambles to R(H(R(h), s2)), the odd
 // one's sobol_dim1(R(h)) to R(H(R(sobol_dim1(R(h))), s2')). Both come from the same h: one hash of
 // the index per pair, the same bits as scrambling each dimension on its own (tests/test_reference_bits.cpp).
-void PhotonSampler::quasi_pair(int pair, std::uint32_t& even, std::uint32_t& odd) const {
-    const std::uint64_t pair_seed = mix64(replica_seed_ + static_cast<std::uint64_t>(pair) * 0xA24BAED4963EE407ull);
-    const std::uint32_t h = lk_hash(reverse_bits(static_cast<std::uint32_t>(index_)), static_cast<std::uint32_t>(pair_seed));
+namespace {
+
+void scrambled_pair(std::uint32_t index, std::uint64_t pair_seed, std::uint32_t& even, std::uint32_t& odd) {
+    const std::uint32_t h = lk_hash(reverse_bits(index), static_cast<std::uint32_t>(pair_seed));
     const std::uint32_t seed2 = static_cast<std::uint32_t>(pair_seed >> 32);
     even = reverse_bits(lk_hash(reverse_bits(h), seed2));
     odd = reverse_bits(lk_hash(reversed_dim1_of_reversed(h), seed2 ^ 0x68bc21ebu));
+}
+
+}  // namespace
+
+void PhotonSampler::quasi_pair(int pair, std::uint32_t& even, std::uint32_t& odd) const {
+    scrambled_pair(static_cast<std::uint32_t>(index_), pair_seed(replica_seed_, pair), even, odd);
+}
+
+SamplerSeeds PhotonSampler::seeds(SamplerKind kind, std::uint64_t seed, std::uint32_t replica) {
+    const PhotonSampler s(kind, seed, replica, 0);
+    return {kind, s.replica_seed_, pair_seed(s.replica_seed_, 0)};
+}
+
+void PhotonSampler::emission(const SamplerSeeds& seeds, std::uint64_t index, double& u1, double& u2) {
+    if (seeds.kind == SamplerKind::Independent || index > 0xFFFFFFFFull) {
+        PhotonSampler(seeds, index).get2(0, u1, u2);
+        return;
+    }
+    std::uint32_t even, odd;
+    scrambled_pair(static_cast<std::uint32_t>(index), seeds.pair0_seed, even, odd);
+    u1 = (static_cast<double>(even) + 0.5) * kTo01;
+    u2 = (static_cast<double>(odd) + 0.5) * kTo01;
 }
 
 double PhotonSampler::get(int dim) const {

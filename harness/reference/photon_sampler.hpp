@@ -31,11 +31,24 @@ bool parse_sampler(const std::string& text, SamplerKind& kind);
 // Dimensions past this use independent random numbers in either sampler (deep Fresnel chains).
 constexpr int kQuasiDimensions = 16;
 
+// What the samplers of every photon of one (seed, replica) share, hashed once rather than per photon.
+struct SamplerSeeds {
+    SamplerKind kind = SamplerKind::Sobol;
+    std::uint64_t replica_seed = 0;
+    std::uint64_t pair0_seed = 0;   // the first pair's scramble seeds (dimensions 0 and 1)
+};
+
 class PhotonSampler {
 public:
     PhotonSampler() = default;
     PhotonSampler(SamplerKind kind, std::uint64_t seed, std::uint32_t replica, std::uint64_t index)
         : kind_(kind), replica_seed_(mix64(seed * 0x9E3779B97F4A7C15ull + replica + 1)), index_(index) {}
+    // The same sampler as PhotonSampler(kind, seed, replica, index) with seeds(kind, seed, replica).
+    PhotonSampler(const SamplerSeeds& seeds, std::uint64_t index)
+        : kind_(seeds.kind), replica_seed_(seeds.replica_seed), index_(index) {}
+    static SamplerSeeds seeds(SamplerKind kind, std::uint64_t seed, std::uint32_t replica);
+    // get2(0, u1, u2) of PhotonSampler(seeds, index): the emission sample values.
+    static void emission(const SamplerSeeds& seeds, std::uint64_t index, double& u1, double& u2);
     // The value of dimension `dim` (each dimension may be read any number of times).
     double get(int dim) const;
     // Dimensions dim and dim + 1 at once (the same values as two get calls; one index hash when they
@@ -45,6 +58,9 @@ public:
 private:
     // The scrambled 32-bit points of both dimensions of a pair.
     void quasi_pair(int pair, std::uint32_t& even, std::uint32_t& odd) const;
+    static std::uint64_t pair_seed(std::uint64_t replica_seed, int pair) {
+        return mix64(replica_seed + static_cast<std::uint64_t>(pair) * 0xA24BAED4963EE407ull);
+    }
     double random(int dim) const {
         const std::uint64_t h = mix64(mix64(replica_seed_ + index_ * 0xD1B54A32D192ED03ull) + (dim + 1) * 0x9E3779B97F4A7C15ull);
         return static_cast<double>(h >> 11) * 0x1.0p-53;

@@ -21,8 +21,8 @@
 //
 // The photon's path is in reference_transport.cpp, media and the camera_volume view in
 // reference_volume.cpp, the waves that trace a chunk's photons together (packet queries) in
-// reference_wavefront.cpp. Bump kReferenceVersion (reference_cache.cpp) whenever the transport or the
-// estimators change.
+// reference_wavefront.cpp, the estimates from the sums in reference_estimate.cpp. Bump kReferenceVersion
+// (reference_cache.cpp) whenever the transport or the estimators change.
 #include <caustics/reference/reference.hpp>
 
 #include <algorithm>
@@ -32,6 +32,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <numbers>
 #include <stdexcept>
 
@@ -60,11 +61,10 @@ constexpr std::uint64_t kBatchSize = 65536;
 constexpr std::size_t kChunkSize = 2048;
 
 using detail::Accumulators;
-using detail::kFixedScale;
-using detail::PixelInfo;
 using detail::RayRecorder;
 using detail::Transport;
 using detail::WaveScratch;
+using detail::finish_reference;
 
 void add_ledger(FluxLedger& sum, const FluxLedger& l) {
     sum.emitted += l.emitted;
@@ -75,19 +75,6 @@ void add_ledger(FluxLedger& sum, const FluxLedger& l) {
     sum.absorbed += l.absorbed;
     sum.scattered += l.scattered;
     sum.truncated += l.truncated;
-}
-
-double nrmse_of(const Image& e, const Image& se, const std::vector<std::uint8_t>* mask) {
-    double sum_e = 0.0, sum_var = 0.0;
-    std::size_t n = 0;
-    for (std::size_t i = 0; i < e.pixels.size(); ++i) {
-        if (mask && !(*mask)[i]) continue;
-        sum_e += e.pixels[i];
-        sum_var += static_cast<double>(se.pixels[i]) * se.pixels[i];
-        ++n;
-    }
-    if (n == 0 || !(sum_e > 0.0)) return 0.0;
-    return std::sqrt(sum_var / n) / (sum_e / n);
 }
 
 // Everything compute_reference needs before tracing; `camera` null for no camera view.
@@ -120,23 +107,51 @@ Transport make_transport(const RayTracer& tracer, const ReceiverChart& chart, co
             throw std::runtime_error("reference: camera G-buffer size differs from the scene camera");
         transport.camera = camera_model.get();
         transport.gbuffer = camera;
-        transport.pixel_scale.assign(camera->covered.size(), 0.0);
-        for (std::size_t i = 0; i < camera->covered.size(); ++i) {
-            if (!camera->covered[i]) continue;
-            const glm::dvec3 to_cam = camera_model->position - glm::dvec3(camera->position[i]);
-            const double d2 = glm::dot(to_cam, to_cam);
-            const double cos_c = d2 > 0.0 ? glm::dot(glm::dvec3(camera->normal[i]), to_cam) / std::sqrt(d2) : 1.0;
-            transport.pixel_scale[i] = std::max(d2, 1e-12) / std::clamp(cos_c, 0.05, 1.0);
-        }
+        // Pixels in parallel (each its own computation): a 1024 x 768 view's table is built per run.
         transport.pixel_info.resize(camera->covered.size());
-        for (std::size_t i = 0; i < camera->covered.size(); ++i) {
-            if (!camera->covered[i] || camera->object[i] < 0) continue;
-            transport.pixel_info[i] = {transport.pixel_scale[i], camera->object[i]};
-        }
+        const glm::dvec3 eye = camera_model->position;
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, camera->covered.size(), 16384),
+                          [&](const tbb::blocked_range<std::size_t>& range) {
+                              for (std::size_t i = range.begin(); i < range.end(); ++i) {
+                                  if (!camera->covered[i]) continue;
+                                  const glm::dvec3 to_cam = eye - glm::dvec3(camera->position[i]);
+                                  const double d2 = glm::dot(to_cam, to_cam);
+                                  const double cos_c =
+                                      d2 > 0.0 ? glm::dot(glm::dvec3(camera->normal[i]), to_cam) / std::sqrt(d2) : 1.0;
+                                  transport.pixel_info[i] = {std::max(d2, 1e-12) / std::clamp(cos_c, 0.05, 1.0),
+                                                             camera->object[i]};
+                              }
+                          });
     }
     detail::setup_media(transport, scene, camera_view && scene_scatters(scene));
     return transport;
 }
+
+// One batch's photon order and emission samples (Transport::batch_order).
+struct BatchBuffers {
+    std::vector<std::uint32_t> order, scratch;
+    std::vector<glm::dvec2> emission;
+};
+
+// Batch buffers handed from one batch to the next.
+class BatchPool {
+public:
+    std::unique_ptr<BatchBuffers> take() {
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (free_.empty()) return std::make_unique<BatchBuffers>();
+        std::unique_ptr<BatchBuffers> b = std::move(free_.back());
+        free_.pop_back();
+        return b;
+    }
+    void give_back(std::unique_ptr<BatchBuffers> b) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        free_.push_back(std::move(b));
+    }
+
+private:
+    std::mutex mutex_;
+    std::vector<std::unique_ptr<BatchBuffers>> free_;
+};
 
 // Traces indices [from, to) of every replica into `sums` (batches of one replica each, fixed order).
 void trace_photons(const Transport& transport, ReferenceSums& sums, std::uint64_t from, std::uint64_t to,
@@ -144,6 +159,7 @@ void trace_photons(const Transport& transport, ReferenceSums& sums, std::uint64_
     const std::size_t bins = sums.bins, pixels = sums.pixels, volume_pixels = sums.volume_pixels;
     const std::uint32_t replicas = sums.replicas;
     tbb::enumerable_thread_specific<WaveScratch> waves;
+    BatchPool pool;
     const std::uint64_t per_replica_batches = (to - from + kBatchSize - 1) / kBatchSize;
     const std::uint64_t batches = per_replica_batches * replicas;
     std::vector<FluxLedger> batch_ledgers(batches);
@@ -152,10 +168,12 @@ void trace_photons(const Transport& transport, ReferenceSums& sums, std::uint64_
             const std::uint32_t replica = static_cast<std::uint32_t>(b / per_replica_batches);
             const std::uint64_t first = from + (b % per_replica_batches) * kBatchSize;
             const std::uint64_t last = std::min(to, first + kBatchSize);
-            // Per batch, not per thread: a thread waiting on the chunks below may start another batch.
-            std::vector<std::uint32_t> order, scratch;
-            std::vector<glm::dvec2> emission;
-            transport.batch_order(replica, first, last, order, scratch, emission);
+            // Per batch, not per thread (a thread waiting on the chunks below may start another batch),
+            // from a pool: 2 MB of fresh memory per batch would fault in every time.
+            std::unique_ptr<BatchBuffers> buffers = pool.take();
+            std::vector<std::uint32_t>& order = buffers->order;
+            std::vector<glm::dvec2>& emission = buffers->emission;
+            transport.batch_order(replica, first, last, order, buffers->scratch, emission);
             const std::size_t chunks = (order.size() + kChunkSize - 1) / kChunkSize;
             std::vector<FluxLedger> chunk_ledgers(chunks);
             tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, 1), [&](const tbb::blocked_range<std::size_t>& cr) {
@@ -174,88 +192,12 @@ void trace_photons(const Transport& transport, ReferenceSums& sums, std::uint64_
             FluxLedger ledger;
             for (const FluxLedger& l : chunk_ledgers) add_ledger(ledger, l);
             batch_ledgers[b] = ledger;
+            pool.give_back(std::move(buffers));
             progress.advance(last - first);
         }
     });
     for (const FluxLedger& l : batch_ledgers) add_ledger(sums.ledger_units, l);
     sums.per_replica = to;
-}
-
-// Mean, standard error and per-replica images of one view from its replica sums; `area(k)` is the
-// measure that turns a sum into irradiance (0: not measured).
-template <class Area>
-void estimate_view(const std::vector<std::int64_t>& sums, std::size_t count, std::uint32_t replicas, double unit,
-                   int width, int height, Area area, Image& mean, Image& stderr_image, std::vector<Image>& per_replica) {
-    mean = Image(width, height, 1);
-    stderr_image = Image(width, height, 1);
-    per_replica.assign(replicas, Image(width, height, 1));
-    const double r = replicas;
-    // Pixels in parallel (each is its own computation: the same bits for any thread count). A pixel no
-    // replica deposited in keeps its zeros without its measure being computed (four atan per camera
-    // pixel: most of a 1024 x 768 view is dark).
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 4096), [&](const tbb::blocked_range<std::size_t>& range) {
-        for (std::size_t k = range.begin(); k < range.end(); ++k) {
-            bool any = false;
-            for (std::uint32_t rep = 0; rep < replicas && !any; ++rep) any = sums[rep * count + k] != 0;
-            if (!any) continue;
-            const double a = area(k);
-            if (!(a > 0.0)) continue;
-            double sum = 0.0, sq = 0.0;
-            for (std::uint32_t rep = 0; rep < replicas; ++rep) {
-                const double e = static_cast<double>(sums[rep * count + k]) / kFixedScale * unit / a;
-                per_replica[rep].pixels[k] = static_cast<float>(e);
-                sum += e;
-                sq += e * e;
-            }
-            const double m = sum / r;
-            const double var = replicas > 1 ? std::max(0.0, (sq - r * m * m) / (r - 1.0)) / r : 0.0;
-            mean.pixels[k] = static_cast<float>(m);
-            stderr_image.pixels[k] = static_cast<float>(std::sqrt(var));
-        }
-    });
-}
-
-ReferenceResult finish_reference(const Transport& transport, const ReceiverChart& chart, const CameraGBuffer* camera,
-                                 const CameraModel* camera_model, std::shared_ptr<const ReferenceSums> sums) {
-    ReferenceResult result;
-    // One replica's photon of light l carries q0 = P_l / scale at n / L photons per light: E = q sum *
-    // scale * L / (n * A).
-    const double unit = transport.scale * static_cast<double>(sums->lights) / static_cast<double>(sums->per_replica);
-    estimate_view(sums->bin_sums, sums->bins, sums->replicas, unit, chart.width(), chart.height(),
-                  [&](std::size_t k) { return chart.bin_area(static_cast<int>(k % chart.width()), static_cast<int>(k / chart.width())); },
-                  result.receiver, result.receiver_stderr, result.receiver_replicas);
-    result.noise_nrmse = nrmse_of(result.receiver, result.receiver_stderr, nullptr);
-    if (camera && sums->pixels > 0) {
-        result.camera_covered = camera->covered;
-        // E_pix = sum w / A_dep = (unit / A_c) sum x with A_c = omega * pixel_scale.
-        estimate_view(sums->pixel_sums, sums->pixels, sums->replicas, unit, camera->width, camera->height,
-                      [&](std::size_t k) {
-                          if (!camera->covered[k]) return 0.0;
-                          const int x = static_cast<int>(k % camera->width), y = static_cast<int>(k / camera->width);
-                          return camera_model->pixel_solid_angle(x, y) * transport.pixel_scale[k];
-                      },
-                      result.camera, result.camera_stderr, result.camera_replicas);
-        result.noise_nrmse_camera = nrmse_of(result.camera, result.camera_stderr, &result.camera_covered);
-    }
-    if (camera && sums->volume_pixels > 0 && !transport.volume_scale.empty()) {
-        // L_pix = (unit / (Omega_pix s_k)) sum x (reference_volume.cpp); every pixel is measured.
-        estimate_view(sums->volume_sums, sums->volume_pixels, sums->replicas, unit, camera->width, camera->height,
-                      [&](std::size_t k) {
-                          const int x = static_cast<int>(k % camera->width), y = static_cast<int>(k / camera->width);
-                          return camera_model->pixel_solid_angle(x, y) * transport.volume_scale[k];
-                      },
-                      result.camera_volume, result.camera_volume_stderr, result.camera_volume_replicas);
-        result.noise_nrmse_volume = nrmse_of(result.camera_volume, result.camera_volume_stderr, nullptr);
-    }
-    // The ledger in watts: all replicas together are R n photons, L per light-set.
-    const double watts = transport.scale * sums->lights / (static_cast<double>(sums->per_replica) * sums->replicas);
-    const FluxLedger& u = sums->ledger_units;
-    result.ledger = {u.emitted * watts, u.deposited_receiver * watts, u.deposited_other * watts, u.direct * watts,
-                     u.escaped * watts, u.absorbed * watts, u.scattered * watts, u.truncated * watts};
-    result.photons = sums->per_replica * sums->replicas;
-    result.replicas = static_cast<int>(sums->replicas);
-    result.sums = std::move(sums);
-    return result;
 }
 
 // Throws unless the reference measured something (see the file comment).
@@ -330,10 +272,10 @@ ReferenceResult compute_reference(const RayTracer& tracer, const ReceiverChart& 
     sums->lights = static_cast<std::uint32_t>(scene.lights.size());
     sums->bins = static_cast<std::size_t>(chart.width()) * chart.height();
     sums->pixels = camera_view ? camera->covered.size() : 0;
-    sums->bin_sums.assign(sums->bins * sums->replicas, 0);
-    sums->pixel_sums.assign(sums->pixels * sums->replicas, 0);
+    sums->bin_sums.resize(sums->bins * sums->replicas);   // zeros (HugePageAllocator)
+    sums->pixel_sums.resize(sums->pixels * sums->replicas);   // zeros (HugePageAllocator)
     sums->volume_pixels = transport.volume ? sums->pixels : 0;
-    sums->volume_sums.assign(sums->volume_pixels * sums->replicas, 0);
+    sums->volume_sums.resize(sums->volume_pixels * sums->replicas);   // zeros (HugePageAllocator)
     if (start) {
         if (start->replicas != sums->replicas || start->lights != sums->lights || start->bins != sums->bins ||
             start->pixels != sums->pixels || start->volume_pixels != sums->volume_pixels)

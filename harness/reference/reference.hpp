@@ -21,6 +21,7 @@
 #include <caustics/frame/frame.hpp>
 #include <caustics/util/hash.hpp>
 #include <caustics/util/image.hpp>
+#include <caustics/reference/huge_pages.hpp>
 #include <caustics/reference/photon_sampler.hpp>
 #include <caustics/frame/receiver_chart.hpp>
 
@@ -78,10 +79,10 @@ struct ReferenceSums {
     std::uint32_t replicas = 0;
     std::uint32_t lights = 0;
     std::size_t bins = 0, pixels = 0;
-    std::vector<std::int64_t> bin_sums;     // replica-major: [r * bins + b]
-    std::vector<std::int64_t> pixel_sums;   // [r * pixels + p]
+    SumVector bin_sums;     // replica-major: [r * bins + b]
+    SumVector pixel_sums;   // [r * pixels + p]
     std::size_t volume_pixels = 0;          // camera_volume: pixels (0: not measured)
-    std::vector<std::int64_t> volume_sums;  // [r * volume_pixels + p]
+    SumVector volume_sums;  // [r * volume_pixels + p]
     FluxLedger ledger_units;                // in units of q (converted to W by the result)
 };
 

@@ -25,26 +25,42 @@ double fresnel_reflectance(double cos_i, double cos_t, double n_i, double n_t) {
     return 0.5 * (rs * rs + rp * rp);
 }
 
+// A photon's path ends: the ledger books its weight under `field`.
+bool end(PhotonState& p, double FluxLedger::*field) {
+    p.end = field;
+    return false;
+}
+
 }  // namespace
 
 void Transport::batch_order(std::uint32_t replica, std::uint64_t first, std::uint64_t last,
                             std::vector<std::uint32_t>& order, std::vector<std::uint32_t>& scratch,
                             std::vector<glm::dvec2>& emission) const {
     emission.resize(static_cast<std::size_t>(last - first));
+    std::vector<SamplerSeeds> seeds;
+    seeds_of(replica, seeds);
+    const std::size_t lights = emitters.size();
     photon_batch_order(
-        emitters.size(), first, last,
+        lights, first, last,
         [&](std::uint64_t i, double& u1, double& u2) {
-            sampler_of(replica, i).get2(0, u1, u2);
+            if (lights == 1) PhotonSampler::emission(seeds[0], i, u1, u2);
+            else PhotonSampler::emission(seeds[i % lights], i / lights, u1, u2);
             emission[static_cast<std::size_t>(i - first)] = {u1, u2};
         },
         order, scratch);
 }
 
-PhotonState Transport::start(std::uint32_t replica, std::uint64_t i, const glm::dvec2& emission, std::uint32_t slot,
-                             std::vector<LedgerEvent>& ledger) const {
+void Transport::seeds_of(std::uint32_t replica, std::vector<SamplerSeeds>& seeds) const {
+    seeds.resize(emitters.size());
+    for (std::size_t l = 0; l < emitters.size(); ++l)
+        seeds[l] = PhotonSampler::seeds(sampler, seed + 0x51ED270B27D5A3C1ull * l, replica);
+}
+
+PhotonState Transport::start(const SamplerSeeds* seeds, std::uint64_t i, const glm::dvec2& emission,
+                             std::uint32_t slot) const {
     PhotonState p;
-    p.rng = sampler_of(replica, i);
     const std::size_t light = emitters.size() == 1 ? 0 : static_cast<std::size_t>(i % emitters.size());
+    p.rng = PhotonSampler(seeds[light], emitters.size() == 1 ? i : i / emitters.size());
     emitters[light].sample(emission.x, emission.y, p.origin, p.dir);
     // Dimension 2 is the dispersion sample, read where a dispersive material is hit (step).
     // Dimensions 3, 4, ... in the order of use: each Fresnel choice, and each segment after a specular
@@ -54,7 +70,6 @@ PhotonState Transport::start(std::uint32_t replica, std::uint64_t i, const glm::
     p.next_dim = 3;
     p.w = start_weight[light];
     p.slot = slot;
-    ledger.push_back({slot, &FluxLedger::emitted, p.w});
     return p;
 }
 
@@ -77,14 +92,12 @@ bool Transport::step(PhotonState& p, const Hit& hit, std::vector<LedgerEvent>& l
         p.w = kept;
     }
     if (!hit.valid) {
-        ledger.push_back({p.slot, &FluxLedger::escaped, p.w});
-        return false;
+        return end(p, &FluxLedger::escaped);
     }
     const Material& material = frame->scene->objects[static_cast<std::size_t>(hit.object)].material;
     if (material.type == MaterialType::Diffuse) {
         if (p.depth == 0) {
-            ledger.push_back({p.slot, &FluxLedger::direct, p.w});
-            return false;
+            return end(p, &FluxLedger::direct);
         }
         // The camera pixel's data is fetched first (prefetch) so that its cache misses overlap the
         // receiver deposit's.
@@ -97,18 +110,17 @@ bool Transport::step(PhotonState& p, const Hit& hit, std::vector<LedgerEvent>& l
             }
         }
         if (hit.object == receiver_object) {
-            ledger.push_back({p.slot, &FluxLedger::deposited_receiver, p.w});
+            p.end = &FluxLedger::deposited_receiver;
             const int bin = chart->bin_of(hit.position);
             if (bin >= 0) add_sum(acc.bins[static_cast<std::size_t>(bin)], to_fixed(p.w));
         } else {
-            ledger.push_back({p.slot, &FluxLedger::deposited_other, p.w});
+            p.end = &FluxLedger::deposited_other;
         }
         if (pixel >= 0) deposit_camera(hit, static_cast<std::size_t>(pixel), p.dir, p.w, acc, shadows);
-        return false;
+        return false;   // its weight p.w is what the ledger books under p.end
     }
     if (p.depth >= max_depth) {
-        ledger.push_back({p.slot, &FluxLedger::truncated, p.w});
-        return false;
+        return end(p, &FluxLedger::truncated);
     }
     ++p.depth;
 
@@ -152,9 +164,12 @@ void Transport::trace(std::uint32_t replica, std::uint64_t i, FluxLedger& ledger
                       RayRecorder& log) const {
     std::vector<LedgerEvent> events;
     std::vector<ShadowQuery> shadows;
+    std::vector<SamplerSeeds> seeds;
+    seeds_of(replica, seeds);
     glm::dvec2 emission;
     sampler_of(replica, i).get2(0, emission.x, emission.y);
-    PhotonState p = start(replica, i, emission, 0, events);
+    PhotonState p = start(seeds.data(), i, emission, 0);
+    events.push_back({0, &FluxLedger::emitted, p.w});
     for (bool alive = true; alive;) {
         log.ray(p.origin, p.dir, 1e-6, 1e30, false);
         alive = step(p, tracer->intersect(p.origin, p.dir), events, acc, shadows);
@@ -164,6 +179,7 @@ void Transport::trace(std::uint32_t replica, std::uint64_t i, FluxLedger& ledger
         }
         shadows.clear();
     }
+    events.push_back({0, p.end, p.w});
     for (const LedgerEvent& e : events) ledger.*e.field += e.value;
 }
 

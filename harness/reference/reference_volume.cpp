@@ -26,6 +26,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 namespace caustics::detail {
 
 void setup_media(Transport& transport, const Scene& scene, bool volume) {
@@ -46,12 +49,15 @@ void setup_media(Transport& transport, const Scene& scene, bool volume) {
             const glm::dvec3 c((k & 1) ? b.hi.x : b.lo.x, (k & 2) ? b.hi.y : b.lo.y, (k & 4) ? b.hi.z : b.lo.z);
             far = std::max(far, glm::length(c - eye));
         }
-    transport.volume_scale.assign(g.covered.size(), 0.0);
-    for (std::size_t i = 0; i < g.covered.size(); ++i) {
-        const double d = g.object[i] >= 0 ? glm::length(glm::dvec3(g.position[i]) - eye) : far;
-        const double s = std::max(d, kVolumeMinDistance);
-        transport.volume_scale[i] = s * s;
-    }
+    transport.volume_scale.resize(g.covered.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, g.covered.size(), 16384),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                          for (std::size_t i = range.begin(); i < range.end(); ++i) {
+                              const double d = g.object[i] >= 0 ? glm::length(glm::dvec3(g.position[i]) - eye) : far;
+                              const double s = std::max(d, kVolumeMinDistance);
+                              transport.volume_scale[i] = s * s;
+                          }
+                      });
 }
 
 void Transport::scatter_to_camera(const glm::dvec3& origin, const glm::dvec3& dir, double length, double w, double u,

@@ -8,8 +8,9 @@
 //
 // Same bits as tracing one photon after another: every photon reads the same sample values and takes
 // the same path (the batched queries return exactly the single-ray hits, tests/test_reference_bits.cpp);
-// deposits are integer sums, whose order does not matter; and the flux ledger, a floating-point sum, is
-// replayed from the wave's events in photon order, each photon's events in the order it made them.
+// deposits are integer sums, whose order does not matter; and each field of the flux ledger, a
+// floating-point sum, receives its additions in photon order, each photon's in the order it made them
+// (LedgerEvent, detail/transport.hpp).
 #include "detail/transport.hpp"
 
 #include <algorithm>
@@ -26,6 +27,7 @@ constexpr std::size_t kWave = 512;
 void Transport::trace_wave(std::uint32_t replica, std::uint64_t first, const std::uint32_t* order,
                            const glm::dvec2* emission, std::size_t n, FluxLedger& ledger, Accumulators& acc,
                            WaveScratch& s) const {
+    seeds_of(replica, s.seeds);
     for (std::size_t w0 = 0; w0 < n; w0 += kWave) {
         const std::size_t count = std::min(kWave, n - w0);
         s.events.clear();
@@ -33,7 +35,8 @@ void Transport::trace_wave(std::uint32_t replica, std::uint64_t first, const std
         s.active.resize(count);
         for (std::size_t k = 0; k < count; ++k) {
             const std::uint32_t offset = order[w0 + k];
-            s.photons[k] = start(replica, first + offset, emission[offset], static_cast<std::uint32_t>(k), s.events);
+            s.photons[k] = start(s.seeds.data(), first + offset, emission[offset], static_cast<std::uint32_t>(k));
+            ledger.emitted += s.photons[k].w;
             s.active[k] = static_cast<std::uint32_t>(k);
         }
         while (!s.active.empty()) {
@@ -59,13 +62,17 @@ void Transport::trace_wave(std::uint32_t replica, std::uint64_t first, const std
             }
             s.active.swap(s.next);
         }
-        // The ledger in photon order: a stable counting sort of the events by photon.
-        s.event_start.assign(count + 1, 0u);
-        for (const LedgerEvent& e : s.events) ++s.event_start[e.slot + 1];
-        for (std::size_t k = 1; k <= count; ++k) s.event_start[k] += s.event_start[k - 1];
-        s.sorted.resize(s.events.size());
-        for (const LedgerEvent& e : s.events) s.sorted[s.event_start[e.slot]++] = e;
-        for (const LedgerEvent& e : s.sorted) ledger.*e.field += e.value;
+        // The ledger in photon order (LedgerEvent): the media's events by a stable counting sort by
+        // photon, then each photon's end.
+        if (!s.events.empty()) {
+            s.event_start.assign(count + 1, 0u);
+            for (const LedgerEvent& e : s.events) ++s.event_start[e.slot + 1];
+            for (std::size_t k = 1; k <= count; ++k) s.event_start[k] += s.event_start[k - 1];
+            s.sorted.resize(s.events.size());
+            for (const LedgerEvent& e : s.events) s.sorted[s.event_start[e.slot]++] = e;
+            for (const LedgerEvent& e : s.sorted) ledger.*e.field += e.value;
+        }
+        for (std::size_t k = 0; k < count; ++k) ledger.*s.photons[k].end += s.photons[k].w;
     }
 }
 

@@ -3,7 +3,7 @@
 // The memory estimate (bytes at the peak of `caustics reference` / `caustics render`), R replicas, T
 // worker threads:
 //   receiver, per bin:  8 (chart areas) + max(trace, finish, store) + 16 (method map, truth, metrics)
-//   camera, per pixel:  29 (G-buffer) + 24 (deposit footprints) + 1 + max(trace, finish, store) + 24
+//   camera, per pixel:  29 (G-buffer) + 16 (deposit footprints) + 1 + max(trace, finish, store) + 24
 //                       (beauty RGB, method map, metrics)
 //     with trace  = 8 R           integer sums, one copy shared by every thread (atomic deposits,
 //                                 reference.cpp)
@@ -93,7 +93,7 @@ std::string integer_text(double x) {
 double reference_bytes_per_bin(int replicas, int threads) { return 8.0 + view_peak(replicas, threads) + 16.0; }
 
 double reference_bytes_per_pixel(int replicas, int threads) {
-    return 29.0 + 24.0 + 1.0 + view_peak(replicas, threads) + 24.0;
+    return 29.0 + 16.0 + 1.0 + view_peak(replicas, threads) + 24.0;
 }
 
 double heightfield_bytes_per_cell() { return 300.0; }

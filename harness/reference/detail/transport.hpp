@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <atomic>
 #include <limits>
+#include <memory>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -15,6 +16,7 @@
 #include <caustics/frame/frame.hpp>
 #include <caustics/frame/ray_tracer.hpp>
 #include <caustics/frame/receiver_chart.hpp>
+#include <caustics/reference/huge_pages.hpp>
 #include <caustics/reference/photon_sampler.hpp>
 #include <caustics/reference/photon_source.hpp>
 #include <caustics/reference/reference.hpp>
@@ -87,11 +89,15 @@ struct PhotonState {
     int depth = 0;              // specular events so far
     int inside = -1;            // dielectric object the photon travels in (-1: outside medium)
     std::uint32_t slot = 0;     // its place in the photon order of its chunk (ledger events)
+    double FluxLedger::*end = nullptr;   // where its path ended (the ledger books its final w there)
 };
 
 // One addition to the flux ledger. The ledger is a floating-point sum, so its bits depend on the order of
-// the additions: a wave of photons books events and the chunk replays them in photon order (each
-// photon's own in the order it made them), the order of tracing one photon after another.
+// the additions to each of its fields: in photon order (each photon's own in the order it made them),
+// the order of tracing one photon after another. A wave books every photon's emitted weight as it
+// starts and its end (PhotonState::end, one per photon) as the wave finishes, both in photon order;
+// only the media's absorbed and scattered shares, any number per photon, become events, which the wave
+// replays in photon order.
 struct LedgerEvent {
     std::uint32_t slot;
     double FluxLedger::*field;
@@ -118,6 +124,7 @@ struct WaveScratch {
     std::vector<std::uint8_t> occluded;
     std::vector<LedgerEvent> events, sorted;
     std::vector<std::uint32_t> event_start;
+    std::vector<SamplerSeeds> seeds;
 };
 
 // Everything one photon needs, shared read-only by all threads.
@@ -127,8 +134,8 @@ struct Transport {
     const ReceiverChart* chart = nullptr;
     const CameraGBuffer* gbuffer = nullptr;
     const CameraModel* camera = nullptr;
-    std::vector<double> pixel_scale;   // camera: d_c^2 / cos_c of each pixel's G-buffer point
-    std::vector<PixelInfo> pixel_info; // camera: pixel_scale and G-buffer object, packed
+    // camera: per pixel, d_c^2 / cos_c of its G-buffer point and its G-buffer object (covered pixels).
+    std::vector<PixelInfo, HugePageAllocator<PixelInfo>> pixel_info;
     std::vector<Emitter> emitters;
     std::vector<double> start_weight;  // q of a photon of each light as it leaves (power / largest power)
     double scale = 1.0;                // the largest light's power [W]: converts q sums to flux
@@ -143,23 +150,25 @@ struct Transport {
     // camera_volume: measured when `volume` (the scene scatters and the camera view is asked).
     bool volume = false;
     int camera_medium = -1;             // CameraGBuffer::medium_object
-    std::vector<double> volume_scale;   // per pixel: s_k [m^2] (reference_volume.cpp)
+    std::vector<double, HugePageAllocator<double>> volume_scale;   // per pixel: s_k [m^2] (reference_volume.cpp)
 
     // Photon i of a replica belongs to light i mod L and is that light's sample i / L.
     PhotonSampler sampler_of(std::uint32_t replica, std::uint64_t i) const {
         return PhotonSampler(sampler, seed + 0x51ED270B27D5A3C1ull * (i % emitters.size()), replica, i / emitters.size());
     }
+    // The same per light, hashed once: PhotonSampler(seeds[i mod L], i / L) is sampler_of(replica, i).
+    void seeds_of(std::uint32_t replica, std::vector<SamplerSeeds>& seeds) const;
     // The batch's photon order (photon_source.hpp); emission[i - first] receives photon i's sample
     // values of dimensions 0 and 1, which the order is made from and its emission reads.
     void batch_order(std::uint32_t replica, std::uint64_t first, std::uint64_t last, std::vector<std::uint32_t>& order,
                      std::vector<std::uint32_t>& scratch, std::vector<glm::dvec2>& emission) const;
-    // Photon i of a replica as it leaves its light (emission: its dimensions 0 and 1); books its
-    // emitted weight.
-    PhotonState start(std::uint32_t replica, std::uint64_t i, const glm::dvec2& emission, std::uint32_t slot,
-                      std::vector<LedgerEvent>& ledger) const;
+    // Photon i of a replica as it leaves its light (emission: its dimensions 0 and 1; seeds: seeds_of
+    // its replica). The caller books its emitted weight w.
+    PhotonState start(const SamplerSeeds* seeds, std::uint64_t i, const glm::dvec2& emission, std::uint32_t slot) const;
     // Everything one segment does after its closest-hit query `hit`: extinction, the camera_volume
-    // point, the deposit, or the next direction. Ledger additions go to `ledger`, visibility queries to
-    // `shadows` (the caller resolves both). False when the photon's path has ended.
+    // point, the deposit, or the next direction. Media's ledger additions go to `ledger`, visibility
+    // queries to `shadows` (the caller resolves both). False when the photon's path has ended: then
+    // p.end says where the ledger books p.w.
     bool step(PhotonState& p, const Hit& hit, std::vector<LedgerEvent>& ledger, Accumulators& acc,
               std::vector<ShadowQuery>& shadows) const;
     // One photon, one query at a time, each logged (record_reference_rays).
@@ -185,6 +194,11 @@ inline void apply_shadow(const ShadowQuery& q) {
     if (q.saturating) add_saturating(*q.target, q.increment);
     else add_sum(*q.target, q.increment);
 }
+
+// The result that `sums` hold: estimates, standard errors, replica images and ledger
+// (reference_estimate.cpp). `camera` null: no camera view.
+ReferenceResult finish_reference(const Transport& transport, const ReceiverChart& chart, const CameraGBuffer* camera,
+                                 const CameraModel* camera_model, std::shared_ptr<const ReferenceSums> sums);
 
 // The media and, when `volume`, the camera_volume set-up of `transport` (reference_volume.cpp).
 void setup_media(Transport& transport, const Scene& scene, bool volume);

@@ -1,0 +1,81 @@
+// The reference's per-run buffers (huge_pages.hpp) and the per-batch sampler seeds (photon_sampler.hpp):
+// speed work that must not change what the reference computes.
+#include <algorithm>
+#include <cstdint>
+#include <cstring>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include <caustics/reference/huge_pages.hpp>
+#include <caustics/reference/photon_sampler.hpp>
+
+using namespace caustics;
+
+TEST(ReferenceBuffers, AllocationsAreZeroedBelowAndAboveTheHugePageThreshold) {
+    for (const std::size_t bytes : {std::size_t{1}, std::size_t{4096}, kHugeThreshold - 8, kHugeThreshold,
+                                    std::size_t{5} << 20, (std::size_t{9} << 20) + 24}) {
+        // Dirty memory of the same size first, so that a reused block would show.
+        {
+            auto* p = static_cast<unsigned char*>(allocate_zeroed(bytes));
+            std::memset(p, 0xA5, bytes);
+            free_zeroed(p, bytes);
+        }
+        auto* p = static_cast<unsigned char*>(allocate_zeroed(bytes));
+        ASSERT_NE(p, nullptr);
+        EXPECT_TRUE(std::all_of(p, p + bytes, [](unsigned char c) { return c == 0; })) << bytes << " bytes";
+        if (bytes >= kHugeThreshold) {
+            EXPECT_EQ(reinterpret_cast<std::uintptr_t>(p) % (std::size_t{2} << 20), 0u);
+        }
+        std::memset(p, 0x5A, bytes);   // writable to the last byte
+        EXPECT_EQ(p[bytes - 1], 0x5A);
+        free_zeroed(p, bytes);
+    }
+}
+
+// SumVector's value-initialisation writes nothing: the zeros must come from the allocation itself.
+TEST(ReferenceBuffers, SumVectorsStartAtZero) {
+    for (int round = 0; round < 3; ++round) {
+        SumVector v(3'000'000 + round);
+        EXPECT_TRUE(std::all_of(v.begin(), v.end(), [](std::int64_t x) { return x == 0; }));
+        std::fill(v.begin(), v.end(), -1);
+        SumVector copy = v;
+        EXPECT_EQ(copy, v);
+    }
+    SumVector small(10);
+    EXPECT_TRUE(std::all_of(small.begin(), small.end(), [](std::int64_t x) { return x == 0; }));
+}
+
+TEST(ReferenceBuffers, PreparingFreshMemoryKeepsItsContents) {
+    std::vector<float> v;
+    const std::size_t n = 786432;   // one 1024 x 768 image
+    v.reserve(n);
+    prepare_fresh_memory(v.data(), n * sizeof(float));
+    v.resize(n, 0.0f);
+    EXPECT_TRUE(std::all_of(v.begin(), v.end(), [](float x) { return x == 0.0f; }));
+    for (std::size_t i = 0; i < n; ++i) v[i] = static_cast<float>(i);
+    prepare_fresh_memory(v.data(), n * sizeof(float));
+    for (std::size_t i = 0; i < n; i += 997) ASSERT_EQ(v[i], static_cast<float>(i));
+}
+
+// The seeds hashed once per light and replica give every photon the sampler it had before.
+TEST(ReferenceBuffers, SeededSamplersAreThePhotonsOwn) {
+    for (const SamplerKind kind : {SamplerKind::Sobol, SamplerKind::Independent})
+        for (const std::uint64_t seed : {std::uint64_t{1}, std::uint64_t{0x51ED270B27D5A3C2ull}})
+            for (const std::uint32_t replica : {0u, 7u})
+                for (const std::uint64_t index : {std::uint64_t{0}, std::uint64_t{1}, std::uint64_t{65537},
+                                                  std::uint64_t{0xFFFFFFFFull}, std::uint64_t{0x100000003ull}}) {
+                    const PhotonSampler direct(kind, seed, replica, index);
+                    const SamplerSeeds seeds = PhotonSampler::seeds(kind, seed, replica);
+                    const PhotonSampler seeded(seeds, index);
+                    double a1, a2, b1, b2;
+                    direct.get2(0, a1, a2);
+                    PhotonSampler::emission(seeds, index, b1, b2);
+                    EXPECT_EQ(std::memcmp(&a1, &b1, sizeof a1), 0);
+                    EXPECT_EQ(std::memcmp(&a2, &b2, sizeof a2), 0);
+                    for (int dim = 0; dim < 20; ++dim) {
+                        const double x = direct.get(dim), y = seeded.get(dim);
+                        EXPECT_EQ(std::memcmp(&x, &y, sizeof x), 0) << "dimension " << dim;
+                    }
+                }
+}
