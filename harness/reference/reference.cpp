@@ -113,7 +113,10 @@ Transport make_transport(const RayTracer& tracer, const ReceiverChart& chart, co
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, camera->covered.size(), 16384),
                           [&](const tbb::blocked_range<std::size_t>& range) {
                               for (std::size_t i = range.begin(); i < range.end(); ++i) {
-                                  if (!camera->covered[i]) continue;
+                                  if (!camera->covered[i]) {
+                                      transport.pixel_info[i] = {0.0, -1};
+                                      continue;
+                                  }
                                   const glm::dvec3 to_cam = eye - glm::dvec3(camera->position[i]);
                                   const double d2 = glm::dot(to_cam, to_cam);
                                   const double cos_c =

@@ -195,7 +195,12 @@ void SweepWorker::stop(bool kill_group, int* status) {
 
 ChildResult SweepWorker::run(const std::vector<std::string>& argv, const std::string& log_path, double timeout_s) {
     const std::string request = json{{"argv", argv}, {"log", log_path}}.dump() + "\n";
-    // A worker that died after its last answer (between runs) is replaced once.
+    // A worker that died after its last answer (between runs) is replaced. Checked before sending: a
+    // process it started may still hold the socket open, and then the request would go through.
+    if (pid_ >= 0 && has_ended(pid_)) {
+        int status = 0;
+        stop(true, &status);
+    }
     if (pid_ < 0) start();
     const auto started = Clock::now();
     if (!send_all(socket_, request)) {

@@ -16,9 +16,12 @@
 //
 // Still isolated: each run's method is created afresh and its thread limit set as in a child; the parent
 // waits for each reply no longer than the run's time limit. A worker that outlives it is killed with its
-// process group, and one that dies (EOF on the socket) is reaped; either way that run is recorded as a
-// per-run child's would be (ChildResult: timed out, crashed with its signal, or its exit code), and the
-// next run starts a new worker. The worker dies with the sweep (PR_SET_PDEATHSIG).
+// process group, and one that dies is reaped: the parent sees EOF on the socket or, at least once a
+// second, the worker's ended status (a process the worker started may hold the socket open). Either way
+// that run is recorded as a per-run child's would be (ChildResult: timed out, crashed with its signal, or
+// its exit code; a worker that exited without answering also leaves a line in the run's log), and the
+// next run starts a new worker, as does a run after a worker that died between runs. The worker dies
+// with the sweep (PR_SET_PDEATHSIG).
 #include <sys/types.h>
 
 #include <functional>

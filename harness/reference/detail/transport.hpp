@@ -75,9 +75,11 @@ struct Accumulators {
 
 // What a camera deposit needs of one pixel, packed so that it costs one cache miss: the pixel's
 // G-buffer footprint factor (d_c^2 / cos_c) and the primary-hit object (-1 where not covered).
+// Trivially constructible, so that sizing the table writes nothing (HugePageAllocator): the table's
+// build writes every element, {0, -1} where no diffuse surface is seen (object -1 matches no hit).
 struct PixelInfo {
-    double scale = 0.0;
-    int object = -1;
+    double scale;
+    int object;
 };
 
 // One photon in flight: what its next segment needs.
