@@ -19,7 +19,8 @@ void* allocate_zeroed(std::size_t bytes);
 void free_zeroed(void* p, std::size_t bytes);
 
 // Memory whose allocation the caller does not control (an Image's pixels after reserve()), before it
-// is first touched: huge pages on its 2 MiB-aligned part, the rest mapped in one call (from 64 KiB on). Advice only (the contents do not change); a kernel without either just faults as before.
+// is first touched: huge pages on its 2 MiB-aligned part, the rest mapped in one call (from 64 KiB on).
+// Advice only (the contents do not change); a kernel without either just faults as before.
 void prepare_fresh_memory(void* p, std::size_t bytes);
 
 inline constexpr std::size_t kHugeThreshold = std::size_t{1} << 20;

@@ -386,7 +386,9 @@ std::vector<RecordedRay> record_reference_rays(const RayTracer& tracer, const Re
     const std::uint64_t per = photons_per_replica(settings.photons, static_cast<int>(replicas), transport.emitters.size());
     std::vector<std::uint32_t> order, scratch;
     std::vector<glm::dvec2> emission;
+    std::vector<SamplerSeeds> seeds;
     for (std::uint32_t r = 0; r < replicas; ++r) {
+        transport.seeds_of(r, seeds);
         acc.bins = bin_sums.data() + r * bins;
         acc.pixels = camera_view ? pixel_sums.data() + r * pixels : nullptr;
         acc.volume = transport.volume ? volume_sums.data() + r * pixels : nullptr;
@@ -395,7 +397,7 @@ std::vector<RecordedRay> record_reference_rays(const RayTracer& tracer, const Re
             transport.batch_order(r, first, last, order, scratch, emission);
             for (const std::uint32_t i : order) {
                 const std::size_t before = recorder.rays.size();
-                transport.trace(r, first + i, ledger, acc, recorder);
+                transport.trace(seeds.data(), first + i, emission[i], ledger, acc, recorder);
                 for (std::size_t k = before; k < recorder.rays.size(); ++k)
                     recorder.rays[k].segment = static_cast<std::uint8_t>(std::min<std::size_t>(k - before, 255));
             }

@@ -160,15 +160,11 @@ bool Transport::step(PhotonState& p, const Hit& hit, std::vector<LedgerEvent>& l
     return true;
 }
 
-void Transport::trace(std::uint32_t replica, std::uint64_t i, FluxLedger& ledger, Accumulators& acc,
-                      RayRecorder& log) const {
+void Transport::trace(const SamplerSeeds* seeds, std::uint64_t i, const glm::dvec2& emission, FluxLedger& ledger,
+                      Accumulators& acc, RayRecorder& log) const {
     std::vector<LedgerEvent> events;
     std::vector<ShadowQuery> shadows;
-    std::vector<SamplerSeeds> seeds;
-    seeds_of(replica, seeds);
-    glm::dvec2 emission;
-    sampler_of(replica, i).get2(0, emission.x, emission.y);
-    PhotonState p = start(seeds.data(), i, emission, 0);
+    PhotonState p = start(seeds, i, emission, 0);
     events.push_back({0, &FluxLedger::emitted, p.w});
     for (bool alive = true; alive;) {
         log.ray(p.origin, p.dir, 1e-6, 1e30, false);

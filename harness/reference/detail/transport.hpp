@@ -154,11 +154,8 @@ struct Transport {
     int camera_medium = -1;             // CameraGBuffer::medium_object
     std::vector<double, HugePageAllocator<double>> volume_scale;   // per pixel: s_k [m^2] (reference_volume.cpp)
 
-    // Photon i of a replica belongs to light i mod L and is that light's sample i / L.
-    PhotonSampler sampler_of(std::uint32_t replica, std::uint64_t i) const {
-        return PhotonSampler(sampler, seed + 0x51ED270B27D5A3C1ull * (i % emitters.size()), replica, i / emitters.size());
-    }
-    // The same per light, hashed once: PhotonSampler(seeds[i mod L], i / L) is sampler_of(replica, i).
+    // Photon i of a replica belongs to light i mod L and is that light's sample i / L: its sampler is
+    // PhotonSampler(seeds[i mod L], i / L), the seeds hashed once per light and replica.
     void seeds_of(std::uint32_t replica, std::vector<SamplerSeeds>& seeds) const;
     // The batch's photon order (photon_source.hpp); emission[i - first] receives photon i's sample
     // values of dimensions 0 and 1, which the order is made from and its emission reads.
@@ -173,8 +170,9 @@ struct Transport {
     // p.end says where the ledger books p.w.
     bool step(PhotonState& p, const Hit& hit, std::vector<LedgerEvent>& ledger, Accumulators& acc,
               std::vector<ShadowQuery>& shadows) const;
-    // One photon, one query at a time, each logged (record_reference_rays).
-    void trace(std::uint32_t replica, std::uint64_t i, FluxLedger& ledger, Accumulators& acc, RayRecorder& log) const;
+    // One photon, one query at a time, each logged (record_reference_rays); seeds and emission as for start().
+    void trace(const SamplerSeeds* seeds, std::uint64_t i, const glm::dvec2& emission, FluxLedger& ledger,
+               Accumulators& acc, RayRecorder& log) const;
     // Photons first + order[0 .. n) of one replica, in that order as far as the ledger's bits go, traced
     // as waves: all live photons' next segments as one batch of packet queries, then their visibility
     // queries as another (reference_wavefront.cpp). Adds to `ledger` and `acc`.
