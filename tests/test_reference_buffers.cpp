@@ -1,14 +1,18 @@
-// The reference's per-run buffers (huge_pages.hpp) and the per-batch sampler seeds (photon_sampler.hpp):
-// speed work that must not change what the reference computes.
+// The zeroed buffers of images and of the reference's per-run sums (util/huge_pages.hpp) and the
+// per-batch sampler seeds (photon_sampler.hpp): speed work that must not change what is computed.
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
 
-#include <caustics/reference/huge_pages.hpp>
 #include <caustics/reference/photon_sampler.hpp>
+#include <caustics/reference/reference.hpp>
+#include <caustics/util/huge_pages.hpp>
+#include <caustics/util/image.hpp>
 
 using namespace caustics;
 
@@ -44,6 +48,27 @@ TEST(ReferenceBuffers, SumVectorsStartAtZero) {
     }
     SumVector small(10);
     EXPECT_TRUE(std::all_of(small.begin(), small.end(), [](std::int64_t x) { return x == 0; }));
+}
+
+// An Image's zeros come from its allocation too (no pass over the pixels); other fills are written.
+TEST(ReferenceBuffers, ImagesStartAtTheirFill) {
+    for (const auto [w, h] : {std::pair{3, 2}, std::pair{1024, 768}, std::pair{1500, 1001}}) {
+        for (int round = 0; round < 2; ++round) {
+            {   // a dirtied image of the same size first, so that reused memory would show
+                Image dirty(w, h, 1, 7.0f);
+                EXPECT_EQ(dirty.pixels.back(), 7.0f);
+            }
+            const Image zero(w, h);
+            ASSERT_EQ(zero.pixels.size(), static_cast<std::size_t>(w) * h);
+            EXPECT_TRUE(std::all_of(zero.pixels.begin(), zero.pixels.end(), [](float x) { return x == 0.0f && !std::signbit(x); }));
+        }
+        const Image negative_zero(w, h, 3, -0.0f);
+        EXPECT_TRUE(std::all_of(negative_zero.pixels.begin(), negative_zero.pixels.end(), [](float x) { return std::signbit(x); }));
+        Image copy = negative_zero;
+        EXPECT_EQ(copy.pixels, negative_zero.pixels);
+        copy.pixels.resize(copy.pixels.size() + 5, 0.0f);   // an explicit value is always written
+        EXPECT_EQ(copy.pixels.back(), 0.0f);
+    }
 }
 
 TEST(ReferenceBuffers, PreparingFreshMemoryKeepsItsContents) {

@@ -62,7 +62,7 @@ TEST(Baseline, SceneWithoutHeightFieldUsesTheBestConstantOverLitBins) {
     truth.pixels = {0.0f, 1.0f, 3.0f, 2.0f};
     const Baseline b = make_baseline(Image(), truth);
     EXPECT_EQ(b.kind, "constant");
-    EXPECT_EQ(b.map.pixels, (std::vector<float>{0.0f, 2.0f, 2.0f, 2.0f}));
+    EXPECT_EQ(b.map.pixels, (PixelVector{0.0f, 2.0f, 2.0f, 2.0f}));
 }
 
 // Through the whole pipeline: the analytic truth is used where the scene has one and said so, or the

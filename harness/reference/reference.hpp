@@ -21,11 +21,14 @@
 #include <caustics/frame/frame.hpp>
 #include <caustics/util/hash.hpp>
 #include <caustics/util/image.hpp>
-#include <caustics/reference/huge_pages.hpp>
+#include <caustics/util/huge_pages.hpp>
 #include <caustics/reference/photon_sampler.hpp>
 #include <caustics/frame/receiver_chart.hpp>
 
 namespace caustics {
+
+// The reference's fixed-point sums (ReferenceSums): zeroed when sized, without a pass over them.
+using SumVector = std::vector<std::int64_t, HugePageAllocator<std::int64_t>>;
 
 // Where the emitted flux went [W]. emitted == sum of the others up to round-off.
 struct FluxLedger {

@@ -30,16 +30,11 @@ double nrmse_of(const Image& e, const Image& se, const std::vector<std::uint8_t>
 template <class Area>
 void estimate_view(const SumVector& sums, std::size_t count, std::uint32_t replicas, double unit,
                    int width, int height, Area area, Image& mean, Image& stderr_image, std::vector<Image>& per_replica) {
-    // The 2 + R images are fresh memory, first touched here: in parallel, on huge pages where they fit.
+    // The 2 + R images: zeroed memory (util/image.hpp), written below only where a replica deposited.
+    // Allocated in parallel: below 1 MiB an image's memory is cleared when it is allocated.
     per_replica.assign(replicas, Image());
     tbb::parallel_for(std::uint32_t{0}, replicas + 2, [&](std::uint32_t i) {
-        Image& image = i == replicas ? mean : i == replicas + 1 ? stderr_image : per_replica[i];
-        image = Image();
-        image.width = width, image.height = height, image.channels = 1;
-        const std::size_t n = static_cast<std::size_t>(width) * height;
-        image.pixels.reserve(n);
-        prepare_fresh_memory(image.pixels.data(), n * sizeof(float));
-        image.pixels.resize(n, 0.0f);
+        (i == replicas ? mean : i == replicas + 1 ? stderr_image : per_replica[i]) = Image(width, height);
     });
     const double r = replicas;
     // Pixels in parallel (each is its own computation: the same bits for any thread count). A pixel no

@@ -16,7 +16,7 @@
 #include <caustics/frame/frame.hpp>
 #include <caustics/frame/ray_tracer.hpp>
 #include <caustics/frame/receiver_chart.hpp>
-#include <caustics/reference/huge_pages.hpp>
+#include <caustics/util/huge_pages.hpp>
 #include <caustics/reference/photon_sampler.hpp>
 #include <caustics/reference/photon_source.hpp>
 #include <caustics/reference/reference.hpp>

@@ -378,9 +378,9 @@ TEST(WaveOptics, RepeatedFramesAndNewScenesMatchFreshMethods) {
         return m.render(frame, req).receiver.pixels;
     };
     auto reused = make_method(params);
-    const std::vector<float> a1 = render(*reused, first);
-    const std::vector<float> a2 = render(*reused, first);
-    const std::vector<float> b = render(*reused, second);
+    const PixelVector a1 = render(*reused, first);
+    const PixelVector a2 = render(*reused, first);
+    const PixelVector b = render(*reused, second);
     EXPECT_EQ(a2, a1);
     EXPECT_EQ(b, render(*make_method(params), second));
     EXPECT_NE(b, a1);
@@ -620,7 +620,7 @@ TEST(WaveOptics, ObliqueSineConvergesToTheExactTruth) {
 
 TEST(WaveOptics, RefractedScreenIsIndependentOfTheThreadCount) {
     const Scene scene = water_scene(HeightGenerator::Sine, 0.01, -0.3, {0.4, 0.2, -1}, 48, 1.0);
-    std::vector<float> runs[2];
+    PixelVector runs[2];
     for (int threads : {1, 2}) {
         tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
         runs[threads - 1] = render_receiver(scene, {{"grid", "256"}}).receiver.pixels;

@@ -1,9 +1,10 @@
 #pragma once
-// Large buffers backed by 2 MiB pages. A reference's per-run memory (the camera sums: 50 MB for a
-// 1024 x 768 view and 8 replicas; its per-pixel tables and result images) is touched for the first
-// time on every run. With 4 KiB pages each first touch is a page fault, and on a virtual machine a
+// Zeroed memory for large arrays, backed by 2 MiB pages. Images (util/image.hpp) and a reference's
+// per-run sums and tables (the camera sums: 50 MB for a 1024 x 768 view and 8 replicas) are fresh
+// memory on every run. With 4 KiB pages each first touch is a page fault, and on a virtual machine a
 // fault costs ~15 us: 190 ms for the camera sums alone, several times the photons' own tracing at 1e6
-// photons (bench/bench_reference.cpp). Huge pages take 512 times fewer faults.
+// photons (bench/bench_reference.cpp). Huge pages take 512 times fewer faults, and memory that comes
+// zeroed needs no pass to clear it.
 #include <cstddef>
 #include <cstdint>
 #include <new>
@@ -13,16 +14,21 @@
 
 namespace caustics {
 
-// Zeroed memory of at least `bytes`: mapped fresh and advised to use huge pages from kHugeThreshold on
-// (aligned to 2 MiB so that every page of it can be one), from calloc below. Throws std::bad_alloc.
+// Zeroed memory of at least `bytes`. From kHugeThreshold on: a block freed earlier, cleared (up to
+// 256 MiB of freed blocks stay mapped for reuse), or a fresh mapping advised to use huge pages (aligned
+// to 2 MiB so that every page of it can be one), which comes zeroed. Below: heap memory, mapped in one
+// call where it is fresh, then cleared. Throws std::bad_alloc.
 void* allocate_zeroed(std::size_t bytes);
 void free_zeroed(void* p, std::size_t bytes);
 
-// Memory whose allocation the caller does not control (an Image's pixels after reserve()), before it
+// Memory whose allocation the caller does not control (a std::vector's after reserve()), before it
 // is first touched: huge pages on its 2 MiB-aligned part, the rest mapped in one call (from 64 KiB on).
 // Advice only (the contents do not change); a kernel without either just faults as before.
 void prepare_fresh_memory(void* p, std::size_t bytes);
 
+// Below 1 MiB a block comes from the heap: a 2 MiB page per allocation would waste up to 8 times the
+// memory of a 256 x 256 receiver map, and freed heap blocks are reused already mapped (ten such maps,
+// a reference's 2 + R, cost about 0.6 ms from the heap and 4-5 ms on fresh huge pages here).
 inline constexpr std::size_t kHugeThreshold = std::size_t{1} << 20;
 
 // A std::allocator replacement for large arrays of trivially constructible values.
@@ -40,7 +46,7 @@ struct HugePageAllocator {
     // Value-initialisation (resize(n), SumVector(n)) writes nothing: allocate() returns zeroed memory,
     // whose pages are then mapped only where the run touches them (a 50 MB memset less per reference).
     // So an element is zero only when it is new memory: shrinking such a vector and growing it again
-    // within its capacity would keep the old values (ReferenceSums' vectors are sized once).
+    // within its capacity with resize(n) keeps the old values (resize(n, 0) writes zeros).
     template <class U>
     void construct(U* p) {
         if constexpr (std::is_trivially_default_constructible_v<U>) ::new (static_cast<void*>(p)) U;
@@ -53,8 +59,5 @@ struct HugePageAllocator {
     template <class U>
     bool operator==(const HugePageAllocator<U>&) const noexcept { return true; }
 };
-
-// The reference's fixed-point sums (ReferenceSums).
-using SumVector = std::vector<std::int64_t, HugePageAllocator<std::int64_t>>;
 
 }  // namespace caustics
