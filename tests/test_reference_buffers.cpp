@@ -28,13 +28,33 @@ TEST(ReferenceBuffers, AllocationsAreZeroedBelowAndAboveTheHugePageThreshold) {
         auto* p = static_cast<unsigned char*>(allocate_zeroed(bytes));
         ASSERT_NE(p, nullptr);
         EXPECT_TRUE(std::all_of(p, p + bytes, [](unsigned char c) { return c == 0; })) << bytes << " bytes";
-        if (bytes >= kHugeThreshold) {
+        if (bytes >= kHugeThreshold && !kHeapOnly) {
             EXPECT_EQ(reinterpret_cast<std::uintptr_t>(p) % (std::size_t{2} << 20), 0u);
         }
         std::memset(p, 0x5A, bytes);   // writable to the last byte
         EXPECT_EQ(p[bytes - 1], 0x5A);
         free_zeroed(p, bytes);
     }
+}
+
+// Freed large blocks are kept for reuse up to a cap, the oldest given back first: more than the cap's
+// worth of dirtied blocks, freed, must come back zeroed and aligned, and no larger than asked.
+TEST(ReferenceBuffers, KeptBlocksComeBackZeroedPastTheCap) {
+    const std::size_t bytes = (std::size_t{100} << 20) + 12;   // three of them exceed the 256 MiB cap
+    std::vector<unsigned char*> blocks;
+    for (int i = 0; i < 3; ++i) {
+        blocks.push_back(static_cast<unsigned char*>(allocate_zeroed(bytes)));
+        std::memset(blocks.back(), 0xC3, bytes);
+    }
+    for (unsigned char* p : blocks) free_zeroed(p, bytes);
+    for (unsigned char*& p : blocks) {
+        p = static_cast<unsigned char*>(allocate_zeroed(bytes));
+        EXPECT_TRUE(std::all_of(p, p + bytes, [](unsigned char c) { return c == 0; }));
+        if (!kHeapOnly) {
+            EXPECT_EQ(reinterpret_cast<std::uintptr_t>(p) % (std::size_t{2} << 20), 0u);
+        }
+    }
+    for (unsigned char* p : blocks) free_zeroed(p, bytes);
 }
 
 // SumVector's value-initialisation writes nothing: the zeros must come from the allocation itself.
@@ -52,7 +72,7 @@ TEST(ReferenceBuffers, SumVectorsStartAtZero) {
 
 // An Image's zeros come from its allocation too (no pass over the pixels); other fills are written.
 TEST(ReferenceBuffers, ImagesStartAtTheirFill) {
-    for (const auto [w, h] : {std::pair{3, 2}, std::pair{1024, 768}, std::pair{1500, 1001}}) {
+    for (const auto& [w, h] : {std::pair{3, 2}, std::pair{1024, 768}, std::pair{1500, 1001}}) {
         for (int round = 0; round < 2; ++round) {
             {   // a dirtied image of the same size first, so that reused memory would show
                 Image dirty(w, h, 1, 7.0f);

@@ -31,7 +31,7 @@ template <class Area>
 void estimate_view(const SumVector& sums, std::size_t count, std::uint32_t replicas, double unit,
                    int width, int height, Area area, Image& mean, Image& stderr_image, std::vector<Image>& per_replica) {
     // The 2 + R images: zeroed memory (util/image.hpp), written below only where a replica deposited.
-    // Allocated in parallel: below 1 MiB an image's memory is cleared when it is allocated.
+    // Allocated in parallel: heap memory (below 1 MiB) and reused blocks are cleared when allocated.
     per_replica.assign(replicas, Image());
     tbb::parallel_for(std::uint32_t{0}, replicas + 2, [&](std::uint32_t i) {
         (i == replicas ? mean : i == replicas + 1 ? stderr_image : per_replica[i]) = Image(width, height);

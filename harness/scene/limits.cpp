@@ -14,6 +14,8 @@
 //                       sine scene at 1024^2 and 2048^2 cells), plus 40 per vertex for the waves
 //                       simulation and 24 per volume sample for the noise synthesis
 //   mesh: 72 per vertex and 160 per triangle (the scene's and the frame's copies, Embree's copy and BVH)
+// Not counted: buffers of 1 MiB and more are rounded up to 2 MiB (at most 2 MiB each, small against the
+// sizes the limit guards), and up to 256 MiB of freed ones stay mapped for reuse (util/huge_pages.hpp).
 // A method's own buffers beyond one map per view are the method's; the measured peak of a reference on a
 // 2048^2 receiver with R = 8, T = 2 was 297 B per bin against 256 estimated before the cache encoding
 // was reserved exactly (it then grew its strings by doubling).

@@ -23,21 +23,28 @@ constexpr int kPopulateWrite = MADV_POPULATE_WRITE;
 constexpr int kPopulateWrite = 23;
 #endif
 
-// Freed large blocks kept mapped for reuse, up to kCachedBytes in all: a reused block costs one memset
-// where a fresh one costs its page faults and the kernel's clearing. Renderers allocate and free their
-// output images every frame (a 1024 x 768 camera view is 3 MB); with fresh mappings each time, an
-// image-space method's camera lookup took 0.7-1 ms longer per frame.
+// Freed large blocks kept mapped for reuse, up to kCachedBytes in all, the oldest unmapped first to make
+// room: a reused block costs one memset where a fresh one costs its page faults and the kernel's
+// clearing. Renderers allocate and free their output images every frame (a 1024 x 768 camera view is
+// 3 MB); with fresh mappings each time, an image-space method's camera lookup took 0.7-1 ms longer per
+// frame.
+constexpr std::size_t kCachedBytes = std::size_t{256} << 20;
+
 struct BlockCache {
     std::mutex mutex;
-    std::vector<std::pair<std::size_t, void*>> blocks;   // (mapped size, address), most recent last
+    std::vector<std::pair<std::size_t, void*>> blocks;   // (mapped size, address), oldest first
     std::size_t bytes = 0;
+    // Room for every block the cap allows (each is at least one huge page): keeping a block never
+    // allocates, so freeing never throws.
+    BlockCache() { blocks.reserve(kCachedBytes / kHugePage); }
 };
-constexpr std::size_t kCachedBytes = std::size_t{256} << 20;
 
 BlockCache& block_cache() {
     static BlockCache* cache = new BlockCache;   // never destroyed: buffers may be freed during exit
     return *cache;
 }
+
+bool on_heap(std::size_t bytes) { return kHeapOnly || bytes < kHugeThreshold; }
 
 void* take_cached(std::size_t size) {
     BlockCache& c = block_cache();
@@ -52,19 +59,29 @@ void* take_cached(std::size_t size) {
     return nullptr;
 }
 
-bool keep_cached(void* p, std::size_t size) {
+// Keeps block p (mapped size `size`), unmapping the oldest blocks when the cap needs room, and p itself
+// when it alone exceeds the cap.
+void keep_cached(void* p, std::size_t size) noexcept {
+    if (size > kCachedBytes) {
+        munmap(p, size);
+        return;
+    }
     BlockCache& c = block_cache();
-    std::lock_guard<std::mutex> lock(c.mutex);
-    if (c.bytes + size > kCachedBytes) return false;
-    c.blocks.emplace_back(size, p);
-    c.bytes += size;
-    return true;
+    {
+        std::lock_guard<std::mutex> lock(c.mutex);
+        std::size_t drop = 0;
+        while (c.bytes + size > kCachedBytes) c.bytes -= c.blocks[drop++].first;
+        for (std::size_t i = 0; i < drop; ++i) munmap(c.blocks[i].second, c.blocks[i].first);
+        c.blocks.erase(c.blocks.begin(), c.blocks.begin() + static_cast<std::ptrdiff_t>(drop));
+        c.blocks.emplace_back(size, p);   // within the reserved capacity
+        c.bytes += size;
+    }
 }
 
 }  // namespace
 
 void* allocate_zeroed(std::size_t bytes) {
-    if (bytes < kHugeThreshold) {
+    if (on_heap(bytes)) {
         // calloc would map a fresh block page fault by page fault (~15 us each on a virtual machine).
         void* p = std::malloc(bytes > 0 ? bytes : 1);
         if (!p) throw std::bad_alloc();
@@ -93,9 +110,8 @@ void* allocate_zeroed(std::size_t bytes) {
 
 void free_zeroed(void* p, std::size_t bytes) {
     if (!p) return;
-    if (bytes < kHugeThreshold) return std::free(p);
-    const std::size_t size = round_up(bytes, kHugePage);
-    if (!keep_cached(p, size)) munmap(p, size);
+    if (on_heap(bytes)) return std::free(p);
+    keep_cached(p, round_up(bytes, kHugePage));
 }
 
 void prepare_fresh_memory(void* p, std::size_t bytes) {

@@ -15,9 +15,10 @@
 namespace caustics {
 
 // Zeroed memory of at least `bytes`. From kHugeThreshold on: a block freed earlier, cleared (up to
-// 256 MiB of freed blocks stay mapped for reuse), or a fresh mapping advised to use huge pages (aligned
-// to 2 MiB so that every page of it can be one), which comes zeroed. Below: heap memory, mapped in one
-// call where it is fresh, then cleared. Throws std::bad_alloc.
+// 256 MiB of freed blocks stay mapped for reuse, the oldest unmapped first), or a fresh mapping advised
+// to use huge pages (aligned to 2 MiB so that every page of it can be one, the size rounded up to 2 MiB),
+// which comes zeroed. Below: heap memory, mapped in one call where it is fresh, then cleared. Throws
+// std::bad_alloc.
 void* allocate_zeroed(std::size_t bytes);
 void free_zeroed(void* p, std::size_t bytes);
 
@@ -30,6 +31,20 @@ void prepare_fresh_memory(void* p, std::size_t bytes);
 // memory of a 256 x 256 receiver map, and freed heap blocks are reused already mapped (ten such maps,
 // a reference's 2 + R, cost about 0.6 ms from the heap and 4-5 ms on fresh huge pages here).
 inline constexpr std::size_t kHugeThreshold = std::size_t{1} << 20;
+
+// AddressSanitizer tracks heap blocks, not mappings: under it every size takes the heap's path (no
+// huge pages, no kept blocks), so that overflows and uses after free stay visible.
+#if defined(__SANITIZE_ADDRESS__)
+inline constexpr bool kHeapOnly = true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+inline constexpr bool kHeapOnly = true;
+#else
+inline constexpr bool kHeapOnly = false;
+#endif
+#else
+inline constexpr bool kHeapOnly = false;
+#endif
 
 // A std::allocator replacement for large arrays of trivially constructible values.
 template <class T>
@@ -44,9 +59,12 @@ struct HugePageAllocator {
     }
     void deallocate(T* p, std::size_t n) noexcept { free_zeroed(p, n * sizeof(T)); }
     // Value-initialisation (resize(n), SumVector(n)) writes nothing: allocate() returns zeroed memory,
-    // whose pages are then mapped only where the run touches them (a 50 MB memset less per reference).
-    // So an element is zero only when it is new memory: shrinking such a vector and growing it again
-    // within its capacity with resize(n) keeps the old values (resize(n, 0) writes zeros).
+    // whose pages, when freshly mapped, are then mapped only where the run touches them (a 50 MB memset
+    // less per reference; a reused block was cleared by allocate()). The element is default-initialised
+    // over those zeros, which for the trivial types stored here (integers, floats, PixelInfo) reads as
+    // zero with every compiler this project supports. So an element is zero only when it is new memory:
+    // shrinking such a vector and growing it again within its capacity with resize(n) keeps the old
+    // values (resize(n, 0) writes zeros).
     template <class U>
     void construct(U* p) {
         if constexpr (std::is_trivially_default_constructible_v<U>) ::new (static_cast<void*>(p)) U;

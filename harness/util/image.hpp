@@ -2,12 +2,14 @@
 // A plain float image: row-major, `channels` interleaved floats per pixel, row 0 first.
 // Receiver maps use 1 channel (caustic irradiance E_c in W/m^2); RGB previews use 3.
 //
-// The pixels live in zeroed memory (util/huge_pages.hpp: fresh 2 MiB pages from 1 MiB on, cleared
-// heap memory below): a new large image of zeros costs no pass over its memory and few page faults. A
-// 1024 x 768 view is 3 MB, and a reference's result is 2 + R of them per view (10 with 8 replicas); from
-// std::allocator, value-initialised, they faulted in 4 KiB pages and were written twice. The one
-// difference from std::vector<float>: pixels.resize(n) grows with zeros only into new memory (after a
-// shrink it keeps the old values); resize(n, 0.0f) always writes.
+// The pixels live in zeroed memory (util/huge_pages.hpp: from 1 MiB on, fresh 2 MiB pages or a block
+// freed earlier and cleared; cleared heap memory below): a new large image of zeros costs no pass over
+// fresh memory and few page faults. A 1024 x 768 view is 3 MB, and a reference's result is 2 + R of them
+// per view (10 with 8 replicas); from std::allocator, value-initialised, they faulted in 4 KiB pages and
+// were written twice. Differences from std::vector<float>: a different type (PixelVector; copy into a
+// std::vector<float> with assign); large buffers are rounded up to 2 MiB and, once freed, up to 256 MiB
+// of them stay mapped for reuse; pixels.resize(n) grows with zeros only into new memory (after a shrink it
+// keeps the old values), where resize(n, 0.0f) always writes.
 #include <cmath>
 #include <cstddef>
 #include <vector>
