@@ -89,13 +89,13 @@ void* allocate_zeroed(std::size_t bytes) {
         std::memset(p, 0, bytes);
         return p;
     }
-    // Map one huge page more than needed, then unmap the unaligned head and the tail: the kernel backs
-    // a region with huge pages only where they fit whole and aligned.
     const std::size_t size = round_up(bytes, kHugePage);
     if (void* reused = take_cached(size)) {
         std::memset(reused, 0, bytes);   // the caller sees `bytes` of it
         return reused;
     }
+    // Map one huge page more than needed, then unmap the unaligned head and the tail: the kernel backs
+    // a region with huge pages only where they fit whole and aligned.
     void* raw = mmap(nullptr, size + kHugePage, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
     if (raw == MAP_FAILED) throw std::bad_alloc();
     const auto start = reinterpret_cast<std::uintptr_t>(raw);
