@@ -55,7 +55,8 @@ GBuffer irregular_coverage(int W, int H) {
 }  // namespace
 
 TEST(CausticMappingPositions, ExtendMatchesSerialRowsThenColumns) {
-    for (int texels : {1, 4, 32}) {
+    // 200: past the texture's size, as the method's default (extend to the whole map) is.
+    for (int texels : {1, 4, 32, 200}) {
         const int W = 150, H = 90;   // columns in more than one block of 64
         GBuffer fast = irregular_coverage(W, H), serial = irregular_coverage(W, H);
         extend_positions(fast, texels);
