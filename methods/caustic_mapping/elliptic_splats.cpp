@@ -37,7 +37,25 @@ struct Print {
     double ixx, ixy, iyy;   // 1/2 of the inverse covariance (ixx = 0: the nearest-texel fallback)
     double slope, reach, narrow;   // the cut-off ellipse's chords: see row_span
     double scale;           // value / (sum of the weights over the whole support)
+    std::int32_t kept_rows = -1;   // >= 0: its weights were kept (KeptWeights::rows from here); -1: recomputed
 };
+
+// One row of a splat's footprint whose weights were kept by the normalising pass: texels [i0, i0 + n)
+// of the row, their weights at KeptWeights::weights[w].
+struct KeptRow {
+    std::int32_t i0, n;
+    std::uint32_t w;
+};
+
+// The weights of a fixed group of splats (kKeptGroup, in input order), kept from the normalising pass
+// for the drawing pass. Footprints narrower than kWideSigma (nearly every splat of a focusing caustic:
+// 98 % on the sphere scene) are normalised by summing their weights; keeping those weights lets the
+// drawing pass read them instead of evaluating every exponential a second time.
+struct KeptWeights {
+    std::vector<KeptRow> rows;   // per splat: one per row y0 .. y1
+    std::vector<float> weights;
+};
+constexpr std::size_t kKeptGroup = 256;
 
 // The weights of one row of a footprint: texels [i0, i1] (their centres inside the cut-off ellipse),
 // weight exp(-q), q(i) = a t^2 + c0 with t = i - mid (the texel's offset from the chord's midpoint).
@@ -136,6 +154,45 @@ CAUSTICS_AVX2_CLONES void footprint_sums(const Print& p, glm::dvec2 c, int W, in
     }
 }
 
+// footprint_sums for a footprint wholly inside the image (then the sum over the image is the sum), which
+// also keeps each row's weights. The loop is row_sum's with a store added: the same weights, added in the
+// same order.
+CAUSTICS_AVX2_CLONES double footprint_sum_kept(const Print& p, glm::dvec2 c, KeptWeights& kept) {
+    double sum = 0.0;
+    for (int j = p.y0; j <= p.y1; ++j) {
+        const RowSpan r = row_span(p, c, j);
+        const int n = std::max(r.i1 - r.i0 + 1, 0);
+        const std::size_t w = kept.weights.size();
+        kept.rows.push_back({r.i0, n, static_cast<std::uint32_t>(w)});
+        if (n == 0) continue;
+        kept.weights.resize(w + static_cast<std::size_t>(n));
+        float* __restrict out = kept.weights.data() + w;
+        float row = 0.0f;
+        const float a = r.a, c0 = r.c0, t0 = r.offset(r.i0);
+#pragma omp simd reduction(+ : row)
+        for (int k = 0; k < n; ++k) {
+            const float t = static_cast<float>(k) + t0;
+            const float weight = neg_exp(a * t * t + c0);
+            out[k] = weight;
+            row += weight;
+        }
+        sum += row;
+    }
+    return sum;
+}
+
+// draw_rows for a splat whose weights were kept (wholly inside the image).
+CAUSTICS_AVX2_CLONES void draw_kept_rows(const Print& p, const KeptWeights& kept, int j0, int j1, float scale,
+                                         Image& target) {
+    for (int j = j0; j <= j1; ++j) {
+        const KeptRow& r = kept.rows[static_cast<std::size_t>(p.kept_rows + (j - p.y0))];
+        const float* __restrict w = kept.weights.data() + r.w;
+        float* __restrict row = &target.at(r.i0, j);
+#pragma omp simd
+        for (int k = 0; k < r.n; ++k) row[k] += scale * w[k];
+    }
+}
+
 // Adds scale x weight to the texels of rows [j0, j1] (their columns already clipped to the image).
 CAUSTICS_AVX2_CLONES void draw_rows(const Print& p, glm::dvec2 c, int j0, int j1, float scale, Image& target) {
     for (int j = j0; j <= j1; ++j) {
@@ -206,9 +263,13 @@ SplatStats draw_elliptic(const std::vector<EllipticSplat>& splats, Image& target
     std::vector<Print> prints(n);
     std::vector<std::uint8_t> valid(n, 0);
     std::vector<double> inside(n, 0.0);
+    std::vector<KeptWeights> kept((n + kKeptGroup - 1) / kKeptGroup);
     // Per splat: support, inverse covariance, normalisation over the whole support.
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t k = r.begin(); k != r.end(); ++k) {
+    // Whole groups per task, so that each group's kept weights are written by one thread, in order.
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, kept.size(), 4), [&](const tbb::blocked_range<std::size_t>& groups) {
+        const std::size_t end = std::min(n, groups.end() * kKeptGroup);
+        for (std::size_t k = groups.begin() * kKeptGroup; k != end; ++k) {
+            const std::size_t group = k / kKeptGroup;
             const EllipticSplat& s = splats[k];
             if (!std::isfinite(s.pixel.x) || !std::isfinite(s.pixel.y) || !std::isfinite(s.value) ||
                 std::abs(s.pixel.x) > 1e8f || std::abs(s.pixel.y) > 1e8f)
@@ -234,6 +295,9 @@ SplatStats draw_elliptic(const std::vector<EllipticSplat>& splats, Image& target
                 // narrow footprints (folds, foci), where it is exact.
                 sum = 2.0 * M_PI * std::sqrt(det) * (1.0 - std::exp(-0.5 * kEllipticCutoff * kEllipticCutoff));
                 in = sum;
+            } else if (in_image) {
+                p.kept_rows = static_cast<std::int32_t>(kept[group].rows.size());
+                sum = in = footprint_sum_kept(p, c, kept[group]);
             } else {
                 footprint_sums(p, c, W, H, sum, in);
             }
@@ -241,6 +305,7 @@ SplatStats draw_elliptic(const std::vector<EllipticSplat>& splats, Image& target
                 p.x0 = p.x1 = static_cast<int>(std::floor(s.pixel.x));
                 p.y0 = p.y1 = static_cast<int>(std::floor(s.pixel.y));
                 p.ixx = p.ixy = p.iyy = 0.0;
+                p.kept_rows = -1;
                 sum = 1.0;
                 in = (p.x0 >= 0 && p.y0 >= 0 && p.x0 < W && p.y0 < H) ? 1.0 : 0.0;
             }
@@ -275,6 +340,12 @@ SplatStats draw_elliptic(const std::vector<EllipticSplat>& splats, Image& target
         for (int b = r.begin(); b != r.end(); ++b) {
             const int r0 = b * kBandRows, r1 = std::min(H, r0 + kBandRows) - 1;
             for (std::uint32_t k : in_band[static_cast<std::size_t>(b)]) {
+                if (prints[k].kept_rows >= 0) {
+                    const Print& p = prints[k];
+                    draw_kept_rows(p, kept[k / kKeptGroup], std::max(p.y0, r0), std::min(p.y1, r1),
+                                   static_cast<float>(p.scale), target);
+                    continue;
+                }
                 Print p = prints[k];   // its columns clipped to the image: the same weights, fewer texels
                 p.x0 = std::max(p.x0, 0), p.x1 = std::min(p.x1, W - 1);
                 const glm::dvec2 c(splats[k].pixel);
