@@ -22,6 +22,7 @@
 #include <tbb/parallel_for.h>
 
 #include "elliptic_splats.hpp"
+#include "estimator_lanes.hpp"
 #include "lookup.hpp"
 #include "splats.hpp"
 #include <caustics/util/timing.hpp>
@@ -211,9 +212,27 @@ void CausticMapping::trace(const Scene& scene, const Light& light, Counters& tot
     landing_.assign(static_cast<std::size_t>(g) * g, FaceSplat{0, {glm::vec2(0.0f), 0.0f}});
     tbb::combinable<Counters> counters;
     const Scene* sc = &scene;
+    // A row at a time, in passes: the refraction at the front face of every covered texel, then the exit
+    // points' estimates of the whole row (four rays at once: estimator_lanes.hpp), the refraction out,
+    // the receiver points' estimates, and the landing. Each texel's operations are those of one texel at
+    // a time, in the same order; only the counters (integer sums) are added in another order.
+    struct Pending {
+        std::size_t i;
+        const Batch* batch;
+        double flux, weight;
+        glm::dvec3 v, origin, dir;
+        bool alive;
+    };
     tbb::parallel_for(tbb::blocked_range<int>(0, g, 4), [&](const tbb::blocked_range<int>& rows) {
         Counters& c = counters.local();
+        std::vector<Pending> row;
+        std::vector<EstimateRay> rays;
+        std::vector<EstimateResult> results;
+        std::vector<glm::dvec3> normals;
+        std::vector<std::size_t> which;
+        row.reserve(static_cast<std::size_t>(g));
         for (int y = rows.begin(); y != rows.end(); ++y) {
+            row.clear();
             for (int x = 0; x < g; ++x) {
                 const std::size_t i = front_.index(x, y);
                 const int id = front_.id[i];
@@ -231,7 +250,7 @@ void CausticMapping::trace(const Scene& scene, const Light& light, Counters& tot
                     continue;
                 }
                 const double flux = s_.flux == FluxWeight::Paper ? paper_scale * cos_i : texel_flux(x, y);
-                glm::dvec3 origin = v, dir;
+                glm::dvec3 dir;
                 if (b.role == Role::Mirror) {
                     dir = L + 2.0 * cos_i * n;
                 } else {
@@ -241,34 +260,66 @@ void CausticMapping::trace(const Scene& scene, const Light& light, Counters& tot
                     }
                     if (sc->fresnel) weight *= fresnel_t(cos_i, cos_t, 1.0, mat.ior);
                 }
-                if (b.role == Role::DoubleSurface) {
-                    // Exit point: the same estimator against the back-face texture, started from the
-                    // front-to-back distance of this texel (Wyman's d_V).
-                    double start = s_.estimator.d0;
-                    if (back_tex_.maps[0].id[i] >= 0) start = glm::length(glm::dvec3(back_tex_.maps[0].position[i]) - v);
-                    glm::dvec3 ne;   // the back face's normal at the exit point, from the estimate's last lookup
-                    const EstimateResult e = estimate_intersection(back_tex_, v, dir, s_.estimator, start, &ne);
-                    c.lookups += e.lookups;
-                    c.oscillating += e.oscillating, c.bisection += e.bisected, c.bad_derivative += e.bad_derivative;
-                    c.not_converged += !e.converged;
-                    if (!e.hit) {
-                        ++c.null_exit;
-                        c.nonfinite += e.nonfinite;
-                        continue;
-                    }
-                    const double inside = glm::length(e.point - v);
-                    if (s_.absorption && mat.absorption > 0.0) weight *= std::exp(-mat.absorption * inside);   // Eq. 7
-                    const glm::dvec3 N = glm::dot(dir, ne) > 0.0 ? -ne : ne;
-                    glm::dvec3 out_dir;
-                    if (!refract(dir, N, mat.ior, out_dir, cos_i, cos_t)) {
-                        ++c.tir;
-                        continue;
-                    }
-                    if (sc->fresnel) weight *= fresnel_t(cos_i, cos_t, mat.ior, 1.0);
-                    origin = e.point;
-                    dir = out_dir;
+                row.push_back({i, &b, flux, weight, v, v, dir, true});
+            }
+            // Exit points: the same estimator against the back-face texture, started from the
+            // front-to-back distance of each texel (Wyman's d_V).
+            rays.clear();
+            which.clear();
+            for (std::size_t k = 0; k < row.size(); ++k) {
+                const Pending& t = row[k];
+                if (t.batch->role != Role::DoubleSurface) continue;
+                double start = s_.estimator.d0;
+                if (back_tex_.maps[0].id[t.i] >= 0) start = glm::length(glm::dvec3(back_tex_.maps[0].position[t.i]) - t.v);
+                rays.push_back({t.v, t.dir, start});
+                which.push_back(k);
+            }
+            results.resize(rays.size());
+            normals.resize(rays.size());   // the back face's normal at each exit point (the estimate's last lookup)
+            estimate_rays(back_tex_, s_.estimator, rays.data(), rays.size(), results.data(), normals.data());
+            for (std::size_t e_k = 0; e_k < which.size(); ++e_k) {
+                Pending& t = row[which[e_k]];
+                const EstimateResult& e = results[e_k];
+                const glm::dvec3& ne = normals[e_k];
+                const Material& mat = *t.batch->material;
+                c.lookups += e.lookups;
+                c.oscillating += e.oscillating, c.bisection += e.bisected, c.bad_derivative += e.bad_derivative;
+                c.not_converged += !e.converged;
+                t.alive = false;
+                if (!e.hit) {
+                    ++c.null_exit;
+                    c.nonfinite += e.nonfinite;
+                    continue;
                 }
-                const EstimateResult e = estimate_intersection(receivers_, origin, dir, s_.estimator, s_.estimator.d0);
+                const double inside = glm::length(e.point - t.v);
+                if (s_.absorption && mat.absorption > 0.0) t.weight *= std::exp(-mat.absorption * inside);   // Eq. 7
+                const glm::dvec3 N = glm::dot(t.dir, ne) > 0.0 ? -ne : ne;
+                glm::dvec3 out_dir;
+                double cos_i = 0.0, cos_t = 0.0;
+                if (!refract(t.dir, N, mat.ior, out_dir, cos_i, cos_t)) {
+                    ++c.tir;
+                    continue;
+                }
+                if (sc->fresnel) t.weight *= fresnel_t(cos_i, cos_t, mat.ior, 1.0);
+                t.origin = e.point;
+                t.dir = out_dir;
+                t.alive = true;
+            }
+            // Receiver points.
+            rays.clear();
+            which.clear();
+            for (std::size_t k = 0; k < row.size(); ++k) {
+                if (!row[k].alive) continue;
+                rays.push_back({row[k].origin, row[k].dir, s_.estimator.d0});
+                which.push_back(k);
+            }
+            results.resize(rays.size());
+            estimate_rays(receivers_, s_.estimator, rays.data(), rays.size(), results.data(), nullptr);
+            for (std::size_t e_k = 0; e_k < which.size(); ++e_k) {
+                const Pending& t = row[which[e_k]];
+                const EstimateResult& e = results[e_k];
+                const glm::dvec3 &origin = t.origin, &dir = t.dir;
+                double weight = t.weight;
                 c.lookups += e.lookups;
                 c.oscillating += e.oscillating, c.bisection += e.bisected, c.bad_derivative += e.bad_derivative;
                 c.not_converged += e.hit && !e.converged;
@@ -287,25 +338,26 @@ void CausticMapping::trace(const Scene& scene, const Light& light, Counters& tot
                     continue;
                 }
                 // Single surfaces (water): attenuation between the surface and the receiver (Sec. III.E).
-                if (b.role == Role::SingleSurface && s_.absorption && mat.absorption > 0.0)
+                const Material& mat = *t.batch->material;
+                if (t.batch->role == Role::SingleSurface && s_.absorption && mat.absorption > 0.0)
                     weight *= std::exp(-mat.absorption * glm::length(e.point - origin));
-                Texel t;
-                if (!receivers_.locate(e.point, t)) {
+                Texel where;
+                if (!receivers_.locate(e.point, where)) {
                     ++c.lost_outside;
                     continue;
                 }
                 {   // Landed on the extrapolated rim, off every receiver: counted, and still splatted so
                     // that the footprints of the light landing just inside an edge stay whole.
-                    const GBuffer& rg = receivers_.maps[static_cast<std::size_t>(t.face)];
-                    const int tx = std::min(static_cast<int>(t.px), rg.width - 1), ty = std::min(static_cast<int>(t.py), rg.height - 1);
+                    const GBuffer& rg = receivers_.maps[static_cast<std::size_t>(where.face)];
+                    const int tx = std::min(static_cast<int>(where.px), rg.width - 1), ty = std::min(static_cast<int>(where.py), rg.height - 1);
                     if (rg.id[rg.index(tx, ty)] == kExtended) ++c.missed;
                 }
-                const float value = static_cast<float>(flux * weight);
+                const float value = static_cast<float>(t.flux * weight);
                 if (!std::isfinite(value)) {
                     ++c.nonfinite;
                     continue;
                 }
-                landing_[i] = {t.face, {glm::vec2(static_cast<float>(t.px), static_cast<float>(t.py)), value}};
+                landing_[t.i] = {where.face, {glm::vec2(static_cast<float>(where.px), static_cast<float>(where.py)), value}};
             }
         }
     });
