@@ -22,6 +22,13 @@ constexpr double kMaxPixel = 1 << 21;          // keeps fixed-point edge functio
 constexpr int kSpan = 64;                      // pixels of a row interpolated together
 constexpr int kShortSpan = 16;                 // rows covering fewer pixels are drawn one pixel at a time
 
+// Whether e + j step, j in [0, count], stays below 2^53 in magnitude (exact in a double).
+inline bool exact_in_double(std::int64_t e, std::int64_t step, int count) {
+    constexpr std::int64_t kExact = std::int64_t{1} << 53;
+    const std::int64_t a = e < 0 ? -e : e, b = step < 0 ? -step : step;
+    return a < kExact / 2 && b < kExact / 2 / (count + 1);
+}
+
 // Per-pixel values of one span of a row (structure of arrays, so that the interpolation vectorises).
 struct Span {
     float l0[kSpan], l1[kSpan], l2[kSpan], d[kSpan], px[kSpan], py[kSpan], pz[kSpan];
@@ -434,9 +441,21 @@ GBufferStats GBufferRaster::draw_clipped(const LightProjection& view, const GBuf
                     // the depth test and the stores.
                     for (int xc = xs; xc <= xe; xc += kSpan) {
                         const int count = std::min(kSpan, xe - xc + 1);
-                        for (int j = 0; j < count; ++j, E[0] += step_x[0], E[1] += step_x[1]) {
-                            span.l0[j] = static_cast<float>(E[0]) * inv_area;
-                            span.l1[j] = static_cast<float>(E[1]) * inv_area;
+                        if (exact_in_double(E[0], step_x[0], count) && exact_in_double(E[1], step_x[1], count)) {
+                            // E + j step in double is the integer itself (all below 2^53), so rounding it to
+                            // float gives the same value as the int64 conversion, and the loop vectorises.
+                            const double e0 = static_cast<double>(E[0]), e1 = static_cast<double>(E[1]);
+                            const double s0 = static_cast<double>(step_x[0]), s1 = static_cast<double>(step_x[1]);
+                            for (int j = 0; j < count; ++j) {
+                                span.l0[j] = static_cast<float>(e0 + j * s0) * inv_area;
+                                span.l1[j] = static_cast<float>(e1 + j * s1) * inv_area;
+                            }
+                            E[0] += count * step_x[0], E[1] += count * step_x[1];
+                        } else {
+                            for (int j = 0; j < count; ++j, E[0] += step_x[0], E[1] += step_x[1]) {
+                                span.l0[j] = static_cast<float>(E[0]) * inv_area;
+                                span.l1[j] = static_cast<float>(E[1]) * inv_area;
+                            }
                         }
                         for (int j = 0; j < count; ++j) {
                             float l0 = span.l0[j], l1 = span.l1[j], l2;
@@ -447,6 +466,24 @@ GBufferStats GBufferRaster::draw_clipped(const LightProjection& view, const GBuf
                             span.pz[j] = l0 * P[0].z + l1 * P[1].z + l2 * P[2].z;
                         }
                         const std::size_t i0 = out.index(xc, y);
+                        if (!write_normals) {
+                            // Positions only (the receivers' maps): every texel is written back, the old
+                            // values where the depth test fails, so that the loop has no branch and
+                            // vectorises (the same values as write(); the band's texels are this thread's).
+                            float* __restrict depth = out.depth.data() + i0;
+                            float* __restrict pos = &out.position[i0].x;
+                            std::int32_t* __restrict ids = out.id.data() + i0;
+                            for (int j = 0; j < count; ++j) {
+                                const float old = depth[j], d = span.d[j];
+                                const bool pass = less ? d < old : d > old;
+                                depth[j] = pass ? d : old;
+                                pos[3 * j] = pass ? span.px[j] : pos[3 * j];
+                                pos[3 * j + 1] = pass ? span.py[j] : pos[3 * j + 1];
+                                pos[3 * j + 2] = pass ? span.pz[j] : pos[3 * j + 2];
+                                ids[j] = pass ? id : ids[j];
+                            }
+                            continue;
+                        }
                         for (int j = 0; j < count; ++j)
                             write(i0 + static_cast<std::size_t>(j), span.d[j], span.l0[j], span.l1[j], span.l2[j],
                                   glm::vec3(span.px[j], span.py[j], span.pz[j]));
