@@ -7,6 +7,7 @@
 #include <cmath>
 #include <numeric>
 #include <random>
+#include <span>
 #include <vector>
 
 #include <tbb/global_control.h>
@@ -264,6 +265,45 @@ TEST(GBufferRaster, DepthTestCullingAndPerspectiveAttributes) {
 
 // One set-up for both faces of a closed mesh gives exactly the buffers of two culled draws (front faces
 // with CullMode::Back, back faces with CullMode::Front), in both projections.
+// A positions-only target (the receivers' maps: its long rows are written without a branch) holds the
+// same depths, positions and ids as a target with normals (written fragment by fragment), for both
+// depth tests: random overlapping triangles with rows long and short, tilted in depth, some reaching far
+// outside the image (edge functions beyond 2^53, where the barycentrics keep their 64-bit path).
+TEST(GBufferRaster, PositionsOnlyTargetEqualsTheFullTarget) {
+    const int W = 300, H = 200;
+    const LightProjection v = pixel_view(W, H);
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> x(-20.0, W + 20.0), y(-20.0, H + 20.0), z(-0.9, 0.9), far(-3e5, 3e5);
+    std::vector<glm::vec3> pos;
+    std::vector<glm::uvec3> tris;
+    for (unsigned t = 0; t < 60; ++t) {
+        const bool huge = t % 15 == 0;
+        for (int k = 0; k < 3; ++k) pos.push_back(huge ? at_pixel(far(rng), far(rng), H, z(rng)) : at_pixel(x(rng), y(rng), H, z(rng)));
+        tris.push_back({3 * t, 3 * t + 1, 3 * t + 2});
+    }
+    GBufferRaster raster;
+    for (DepthTest test : {DepthTest::Less, DepthTest::Greater}) {
+        GBuffer full, positions;
+        full.clear(W, H, test, true);
+        positions.clear(W, H, test, false);
+        // Two batches, so that the second one's fragments are tested against the first one's depths.
+        for (std::size_t half : {0, 1}) {
+            const std::span<const glm::uvec3> part(tris.data() + 30 * half, 30);
+            raster.draw(v, {pos, {}, part, static_cast<std::int32_t>(half)}, CullMode::None, test, full);
+            raster.draw(v, {pos, {}, part, static_cast<std::int32_t>(half)}, CullMode::None, test, positions);
+        }
+        int covered = 0;
+        for (std::size_t i = 0; i < full.id.size(); ++i) {
+            ASSERT_EQ(positions.id[i], full.id[i]) << i;
+            ASSERT_EQ(positions.depth[i], full.depth[i]) << i;
+            if (full.id[i] < 0) continue;
+            ++covered;
+            ASSERT_EQ(positions.position[i], full.position[i]) << i;
+        }
+        EXPECT_GT(covered, W * H / 2);
+    }
+}
+
 TEST(GBufferRaster, FrontBackInOnePassEqualsTwoCulledDraws) {
     std::vector<glm::vec3> pos, nrm;
     std::vector<glm::uvec3> tris;
