@@ -10,6 +10,7 @@
 #include <tbb/parallel_for.h>
 
 #include <caustics/blocks/raster/band_bins.hpp>
+#include <caustics/util/target_clones.hpp>
 
 namespace caustics {
 namespace {
@@ -33,6 +34,29 @@ inline bool exact_in_double(std::int64_t e, std::int64_t step, int count) {
 struct Span {
     float l0[kSpan], l1[kSpan], l2[kSpan], d[kSpan], px[kSpan], py[kSpan], pz[kSpan];
 };
+
+// Whether every fragment of a span passes the depth test against `depth`.
+CAUSTICS_AVX2_CLONES bool span_passes(const Span& span, int count, bool less, const float* depth) {
+    int passed = 0;
+    if (less) {
+        for (int j = 0; j < count; ++j) passed += span.d[j] < depth[j];
+    } else {
+        for (int j = 0; j < count; ++j) passed += span.d[j] > depth[j];
+    }
+    return passed == count;
+}
+
+// The stores of a span of a positions-only target (depth, position, id), every fragment passing.
+CAUSTICS_AVX2_CLONES void store_span(const Span& span, int count, std::int32_t id, float* __restrict depth,
+                                     float* __restrict position, std::int32_t* __restrict ids) {
+    for (int j = 0; j < count; ++j) {
+        depth[j] = span.d[j];
+        position[3 * j] = span.px[j];
+        position[3 * j + 1] = span.py[j];
+        position[3 * j + 2] = span.pz[j];
+        ids[j] = id;
+    }
+}
 
 struct Setup {
     std::int64_t X[3], Y[3];      // fixed-point screen vertices, counter-clockwise in the E > 0 sense
@@ -466,22 +490,11 @@ GBufferStats GBufferRaster::draw_clipped(const LightProjection& view, const GBuf
                             span.pz[j] = l0 * P[0].z + l1 * P[1].z + l2 * P[2].z;
                         }
                         const std::size_t i0 = out.index(xc, y);
-                        if (!write_normals) {
-                            // Positions only (the receivers' maps): every texel is written back, the old
-                            // values where the depth test fails, so that the loop has no branch and
-                            // vectorises (the same values as write(); the band's texels are this thread's).
-                            float* __restrict depth = out.depth.data() + i0;
-                            float* __restrict pos = &out.position[i0].x;
-                            std::int32_t* __restrict ids = out.id.data() + i0;
-                            for (int j = 0; j < count; ++j) {
-                                const float old = depth[j], d = span.d[j];
-                                const bool pass = less ? d < old : d > old;
-                                depth[j] = pass ? d : old;
-                                pos[3 * j] = pass ? span.px[j] : pos[3 * j];
-                                pos[3 * j + 1] = pass ? span.py[j] : pos[3 * j + 1];
-                                pos[3 * j + 2] = pass ? span.pz[j] : pos[3 * j + 2];
-                                ids[j] = pass ? id : ids[j];
-                            }
+                        // Positions only (the receivers' maps), every fragment of the span passing the
+                        // depth test (a receiver drawn where nothing nearer was): the same stores as
+                        // write(), without a test per texel, vectorised.
+                        if (!write_normals && span_passes(span, count, less, &out.depth[i0])) {
+                            store_span(span, count, id, &out.depth[i0], &out.position[i0].x, &out.id[i0]);
                             continue;
                         }
                         for (int j = 0; j < count; ++j)
