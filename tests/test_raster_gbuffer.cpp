@@ -263,12 +263,12 @@ TEST(GBufferRaster, DepthTestCullingAndPerspectiveAttributes) {
     EXPECT_GT(covered, 48 * 48 / 4);
 }
 
-// One set-up for both faces of a closed mesh gives exactly the buffers of two culled draws (front faces
-// with CullMode::Back, back faces with CullMode::Front), in both projections.
-// A positions-only target (the receivers' maps: its long rows are written without a branch) holds the
-// same depths, positions and ids as a target with normals (written fragment by fragment), for both
-// depth tests: random overlapping triangles with rows long and short, tilted in depth, some reaching far
-// outside the image (edge functions beyond 2^53, where the barycentrics keep their 64-bit path).
+// A positions-only target (the receivers' maps: spans whose fragments all pass the depth test are stored
+// without a test per texel) holds the same depths, positions and ids as a target with normals (written
+// fragment by fragment), for both depth tests: random overlapping triangles with rows long and short,
+// tilted in depth, some reaching far outside the image (edge functions beyond 2^53, where the
+// barycentrics keep their 64-bit path; both targets share the barycentrics, which the coverage tests
+// above and the method's image comparisons check).
 TEST(GBufferRaster, PositionsOnlyTargetEqualsTheFullTarget) {
     const int W = 300, H = 200;
     const LightProjection v = pixel_view(W, H);
@@ -304,6 +304,8 @@ TEST(GBufferRaster, PositionsOnlyTargetEqualsTheFullTarget) {
     }
 }
 
+// One set-up for both faces of a closed mesh gives exactly the buffers of two culled draws (front faces
+// with CullMode::Back, back faces with CullMode::Front), in both projections.
 TEST(GBufferRaster, FrontBackInOnePassEqualsTwoCulledDraws) {
     std::vector<glm::vec3> pos, nrm;
     std::vector<glm::uvec3> tris;

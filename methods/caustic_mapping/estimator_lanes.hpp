@@ -27,8 +27,11 @@ struct EstimateRay {
     double d_start = 0.0;
 };
 
-// Whether `tex` is one the lanes take (one face, bilinear lookups).
-inline bool lanes_apply(const PositionsTexture& tex) { return !tex.cube && tex.bilinear && tex.faces.size() == 1; }
+// Whether `tex` is one the lanes take: one face, bilinear lookups, its map of the face's size.
+inline bool lanes_apply(const PositionsTexture& tex) {
+    return !tex.cube && tex.bilinear && tex.faces.size() == 1 && tex.maps.size() == 1 &&
+           tex.maps[0].width == tex.faces[0].width && tex.maps[0].height == tex.faces[0].height;
+}
 
 // out[k] = estimate_intersection(tex, rays[k].v, rays[k].r, s, rays[k].d_start, normals ? &normals[k] : nullptr)
 // for k < n, bit for bit: four rays at a time in lanes where lanes_apply(tex), the scalar estimator for

@@ -47,6 +47,8 @@ CAUSTICS_AVX2_CLONES bool span_passes(const Span& span, int count, bool less, co
 }
 
 // The stores of a span of a positions-only target (depth, position, id), every fragment passing.
+// `position` is the span's glm::vec3 array seen as floats (three per texel, no padding).
+static_assert(sizeof(glm::vec3) == 3 * sizeof(float));
 CAUSTICS_AVX2_CLONES void store_span(const Span& span, int count, std::int32_t id, float* __restrict depth,
                                      float* __restrict position, std::int32_t* __restrict ids) {
     for (int j = 0; j < count; ++j) {

@@ -138,7 +138,9 @@ TEST(CausticMappingLanes, SameBitsAsTheScalarEstimator) {
 TEST(CausticMappingLanes, CubeMapsAndNearestLookupsStayScalar) {
     PositionsTexture tex;
     tex.faces.resize(1);
+    tex.faces[0].width = 8, tex.faces[0].height = 6;
     tex.maps.resize(1);
+    tex.maps[0].clear(8, 6);
     tex.bilinear = false;
     EXPECT_FALSE(lanes_apply(tex));
     tex.bilinear = true;
@@ -146,4 +148,6 @@ TEST(CausticMappingLanes, CubeMapsAndNearestLookupsStayScalar) {
     EXPECT_FALSE(lanes_apply(tex));
     tex.cube = false;
     EXPECT_TRUE(lanes_apply(tex));
+    tex.maps[0].clear(8, 7);   // a map of another size than its face
+    EXPECT_FALSE(lanes_apply(tex));
 }
