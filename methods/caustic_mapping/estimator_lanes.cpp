@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <vector>
 
 // The vector types never cross this file's boundary (every function taking one is internal and inlined
 // into estimate_four), so the ABI note GCC gives for them under the baseline target does not apply.
@@ -82,8 +83,14 @@ LANES_INLINE Lookup fetch(const Face& f, const Lanes3& p, Mask active, bool want
     const Lanes px = (x - f.x0) * f.sx, py = (f.y1 - y) * f.sy;
     ok &= (px >= 0.0) & (py >= 0.0) & (px <= static_cast<double>(g.width)) & (py <= static_cast<double>(g.height));
     const Lanes fx = px - 0.5, fy = py - 0.5;
-    Lanes ax{}, ay{};
-    Lanes3 P[4] = {}, N[4] = {};
+    // Per lane: the texel (x0, y0) below and left of the point, its four texels covered; then the
+    // texels' values gathered into vectors from scalars held in registers (writing them into a vector's
+    // lanes one at a time went through memory and stalled on the wide reload). Lanes that are not ok
+    // read texel 0 and are ignored.
+    static_assert(kLanes == 4, "the gathers below list four lanes");
+    std::size_t base[kLanes] = {};
+    double x0s[kLanes] = {}, y0s[kLanes] = {};
+    const std::size_t w = static_cast<std::size_t>(g.width);
     for (int l = 0; l < kLanes; ++l) {
         if (!ok[l]) continue;
         const int x0 = static_cast<int>(std::floor(fx[l])), y0 = static_cast<int>(std::floor(fy[l]));
@@ -91,22 +98,27 @@ LANES_INLINE Lookup fetch(const Face& f, const Lanes3& p, Mask active, bool want
             ok[l] = 0;
             continue;
         }
-        const std::size_t i[4] = {g.index(x0, y0), g.index(x0, y0) + 1, g.index(x0, y0) + g.width,
-                                  g.index(x0, y0) + g.width + 1};
-        if (g.id[i[0]] == -1 || g.id[i[1]] == -1 || g.id[i[2]] == -1 || g.id[i[3]] == -1) {
+        const std::size_t i = g.index(x0, y0);
+        if (g.id[i] == -1 || g.id[i + 1] == -1 || g.id[i + w] == -1 || g.id[i + w + 1] == -1) {
             ok[l] = 0;
             continue;
         }
-        ax[l] = fx[l] - x0;
-        ay[l] = fy[l] - y0;
-        for (int c = 0; c < 4; ++c) {
-            const glm::vec3& q = g.position[i[c]];
-            P[c].x[l] = q.x, P[c].y[l] = q.y, P[c].z[l] = q.z;
-            if (!want_normal) continue;
-            const glm::vec3& n = g.normal[i[c]];
-            N[c].x[l] = n.x, N[c].y[l] = n.y, N[c].z[l] = n.z;
-        }
+        base[l] = i;
+        x0s[l] = x0;
+        y0s[l] = y0;
     }
+    const Lanes ax = fx - Lanes{x0s[0], x0s[1], x0s[2], x0s[3]}, ay = fy - Lanes{y0s[0], y0s[1], y0s[2], y0s[3]};
+    const std::size_t offset[4] = {0, 1, w, w + 1};   // the texels (x0, y0), (x0 + 1, y0), (x0, y0 + 1), (x0 + 1, y0 + 1)
+    auto gather = [&](const std::vector<glm::vec3>& plane, int c) {
+        const glm::vec3* a = plane.data() + offset[c];
+        return Lanes3{Lanes{a[base[0]].x, a[base[1]].x, a[base[2]].x, a[base[3]].x},
+                      Lanes{a[base[0]].y, a[base[1]].y, a[base[2]].y, a[base[3]].y},
+                      Lanes{a[base[0]].z, a[base[1]].z, a[base[2]].z, a[base[3]].z}};
+    };
+    Lanes3 P[4], N[4];
+    for (int c = 0; c < 4; ++c) P[c] = gather(g.position, c);
+    if (want_normal)
+        for (int c = 0; c < 4; ++c) N[c] = gather(g.normal, c);
     const Lanes w00 = (1.0 - ax) * (1.0 - ay), w10 = ax * (1.0 - ay), w01 = (1.0 - ax) * ay, w11 = ax * ay;
     auto blend = [&](const Lanes3* v) {
         return Lanes3{w00 * v[0].x + w10 * v[1].x + w01 * v[2].x + w11 * v[3].x,
