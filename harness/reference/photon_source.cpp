@@ -80,35 +80,39 @@ Emitter make_emitter(const Light& light, const FrameGeometry& frame) {
     return e;
 }
 
-void photon_batch_order(std::uint64_t lights, std::uint64_t first, std::uint64_t last,
-                        const std::function<void(std::uint64_t, double&, double&)>& emission,
-                        std::vector<std::uint32_t>& order, std::vector<std::uint32_t>& scratch) {
-    const std::size_t n = static_cast<std::size_t>(last - first);
-    constexpr std::size_t kCells = 65536;
-    std::vector<std::uint32_t>& cell = scratch;
-    cell.resize(2 * n + kCells + 1);
-    std::uint32_t* key = cell.data();
-    std::uint32_t* tmp = key + n;
-    std::uint32_t* count = tmp + n;
-    std::fill(count, count + kCells + 1, 0u);
+void photon_batch_order(std::uint64_t lights, std::uint64_t first, const std::vector<glm::dvec2>& values,
+                        std::vector<std::uint32_t>& order, std::vector<std::uint64_t>& scratch) {
+    const std::size_t n = values.size();
+    // A stable sort by the 16-bit cell key as two stable passes of 8 bits (least significant first):
+    // the same order as one counting sort over all 65,536 cells, with counts that stay in L1 (the
+    // counting sort's random increments of a 256 KB table cost more than both passes).
+    scratch.resize(2 * n);
+    std::uint64_t* keyed = scratch.data();   // key << 32 | offset
+    std::uint64_t* by_low = keyed + n;
+    std::uint32_t low[257] = {}, high[257] = {};
     for (std::size_t i = 0; i < n; ++i) {
-        double u1, u2;
-        emission(first + i, u1, u2);
-        key[i] = morton2(static_cast<std::uint32_t>(u1 * 256.0), static_cast<std::uint32_t>(u2 * 256.0));
-        ++count[key[i] + 1];
+        const std::uint32_t key = morton2(static_cast<std::uint32_t>(values[i].x * 256.0),
+                                          static_cast<std::uint32_t>(values[i].y * 256.0));
+        keyed[i] = static_cast<std::uint64_t>(key) << 32 | i;
+        ++low[(key & 0xFFu) + 1];
+        ++high[(key >> 8) + 1];
     }
-    for (std::size_t c = 1; c <= kCells; ++c) count[c] += count[c - 1];
+    for (std::size_t c = 1; c <= 256; ++c) low[c] += low[c - 1], high[c] += high[c - 1];
+    for (std::size_t i = 0; i < n; ++i) by_low[low[(keyed[i] >> 32) & 0xFFu]++] = keyed[i];
     order.resize(n);
-    std::uint32_t* by_cell = lights > 1 ? tmp : order.data();
-    for (std::size_t i = 0; i < n; ++i) by_cell[count[key[i]]++] = static_cast<std::uint32_t>(i);
-    if (lights > 1) {   // stable second pass by light (photon k belongs to light k mod L)
-        std::vector<std::uint32_t> light_start(lights + 1, 0u);
-        for (std::size_t i = 0; i < n; ++i) ++light_start[(first + i) % lights + 1];
-        for (std::size_t l = 1; l <= lights; ++l) light_start[l] += light_start[l - 1];
-        for (std::size_t j = 0; j < n; ++j) {
-            const std::uint32_t i = by_cell[j];
-            order[light_start[(first + i) % lights]++] = i;
-        }
+    if (lights <= 1) {
+        for (std::size_t j = 0; j < n; ++j) order[high[by_low[j] >> 40]++] = static_cast<std::uint32_t>(by_low[j]);
+        return;
+    }
+    std::uint64_t* by_cell = keyed;   // reused: every key is in by_low now
+    for (std::size_t j = 0; j < n; ++j) by_cell[high[by_low[j] >> 40]++] = by_low[j];
+    // A stable second pass by light (photon k belongs to light k mod L).
+    std::vector<std::uint32_t> light_start(lights + 1, 0u);
+    for (std::size_t i = 0; i < n; ++i) ++light_start[(first + i) % lights + 1];
+    for (std::size_t l = 1; l <= lights; ++l) light_start[l] += light_start[l - 1];
+    for (std::size_t j = 0; j < n; ++j) {
+        const std::uint32_t i = static_cast<std::uint32_t>(by_cell[j]);
+        order[light_start[(first + i) % lights]++] = i;
     }
 }
 

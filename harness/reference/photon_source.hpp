@@ -4,7 +4,6 @@
 // from photon_sampler.hpp). Split from reference.cpp; everything here is deterministic.
 #include <cmath>
 #include <cstdint>
-#include <functional>
 #include <numbers>
 #include <vector>
 
@@ -48,16 +47,15 @@ struct Emitter {
 // a directional light covers the bounds' projection with a margin; a point light the cone around them.
 Emitter make_emitter(const Light& light, const FrameGeometry& frame);
 
-// The order in which the photons [first, last) of one batch are traced: grouped by light and then along
-// a Z-order curve over a 256 x 256 grid of their two emission sample values (`emission(k, u1, u2)`), so
-// that consecutive photons start close together and take similar paths (coherent BVH traversal,
-// height-field and accumulator accesses). Every photon's sample values depend only on its index, and
-// deposits are integer sums, so the order changes nothing but the round-off of the batch's flux ledger;
-// it is a fixed function of the batch (stable counting sorts), so results stay independent of the
-// thread count. `lights` is the number of emitters (photon k belongs to light k mod lights). `order`
-// receives photon offsets k - first; `scratch` holds keys.
-void photon_batch_order(std::uint64_t lights, std::uint64_t first, std::uint64_t last,
-                        const std::function<void(std::uint64_t, double&, double&)>& emission,
-                        std::vector<std::uint32_t>& order, std::vector<std::uint32_t>& scratch);
+// The order in which the photons [first, first + values.size()) of one batch are traced: grouped by
+// light and then along a Z-order curve over a 256 x 256 grid of their two emission sample values
+// (values[k]: photon first + k's), so that consecutive photons start close together and take similar
+// paths (coherent BVH traversal, height-field and accumulator accesses). Every photon's sample values
+// depend only on its index, and deposits are integer sums, so the order changes nothing but the
+// round-off of the batch's flux ledger; it is a fixed function of the batch (stable sorts), so results
+// stay independent of the thread count. `lights` is the number of emitters (photon k belongs to light
+// k mod lights). `order` receives photon offsets k; `scratch` holds keys.
+void photon_batch_order(std::uint64_t lights, std::uint64_t first, const std::vector<glm::dvec2>& values,
+                        std::vector<std::uint32_t>& order, std::vector<std::uint64_t>& scratch);
 
 }  // namespace caustics

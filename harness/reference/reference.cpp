@@ -61,6 +61,7 @@ constexpr std::uint64_t kBatchSize = 65536;
 constexpr std::size_t kChunkSize = 2048;
 
 using detail::Accumulators;
+using detail::BatchOrder;
 using detail::RayRecorder;
 using detail::Transport;
 using detail::WaveScratch;
@@ -130,30 +131,24 @@ Transport make_transport(const RayTracer& tracer, const ReceiverChart& chart, co
     return transport;
 }
 
-// One batch's photon order and emission samples (Transport::batch_order).
-struct BatchBuffers {
-    std::vector<std::uint32_t> order, scratch;
-    std::vector<glm::dvec2> emission;
-};
-
 // Batch buffers handed from one batch to the next.
 class BatchPool {
 public:
-    std::unique_ptr<BatchBuffers> take() {
+    std::unique_ptr<BatchOrder> take() {
         std::lock_guard<std::mutex> lock(mutex_);
-        if (free_.empty()) return std::make_unique<BatchBuffers>();
-        std::unique_ptr<BatchBuffers> b = std::move(free_.back());
+        if (free_.empty()) return std::make_unique<BatchOrder>();
+        std::unique_ptr<BatchOrder> b = std::move(free_.back());
         free_.pop_back();
         return b;
     }
-    void give_back(std::unique_ptr<BatchBuffers> b) {
+    void give_back(std::unique_ptr<BatchOrder> b) {
         std::lock_guard<std::mutex> lock(mutex_);
         free_.push_back(std::move(b));
     }
 
 private:
     std::mutex mutex_;
-    std::vector<std::unique_ptr<BatchBuffers>> free_;
+    std::vector<std::unique_ptr<BatchOrder>> free_;
 };
 
 // Traces indices [from, to) of every replica into `sums` (batches of one replica each, fixed order).
@@ -172,11 +167,10 @@ void trace_photons(const Transport& transport, ReferenceSums& sums, std::uint64_
             const std::uint64_t first = from + (b % per_replica_batches) * kBatchSize;
             const std::uint64_t last = std::min(to, first + kBatchSize);
             // Per batch, not per thread (a thread waiting on the chunks below may start another batch),
-            // from a pool: 2 MB of fresh memory per batch would fault in every time.
-            std::unique_ptr<BatchBuffers> buffers = pool.take();
-            std::vector<std::uint32_t>& order = buffers->order;
-            std::vector<glm::dvec2>& emission = buffers->emission;
-            transport.batch_order(replica, first, last, order, buffers->scratch, emission);
+            // from a pool: 3 MB of fresh memory per batch would fault in every time.
+            std::unique_ptr<BatchOrder> buffers = pool.take();
+            transport.batch_order(replica, first, last, *buffers);
+            const std::vector<std::uint32_t>& order = buffers->order;
             const std::size_t chunks = (order.size() + kChunkSize - 1) / kChunkSize;
             std::vector<FluxLedger> chunk_ledgers(chunks);
             tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, 1), [&](const tbb::blocked_range<std::size_t>& cr) {
@@ -188,7 +182,8 @@ void trace_photons(const Transport& transport, ReferenceSums& sums, std::uint64_
                 for (std::size_t c = cr.begin(); c < cr.end(); ++c) {
                     FluxLedger ledger;
                     const std::size_t begin = c * kChunkSize, end = std::min(order.size(), begin + kChunkSize);
-                    transport.trace_wave(replica, first, order.data() + begin, emission.data(), end - begin, ledger, acc, wave);
+                    transport.trace_wave(replica, first, order.data() + begin, buffers->emission.data() + begin,
+                                         end - begin, ledger, acc, wave);
                     chunk_ledgers[c] = ledger;
                 }
             });
@@ -384,8 +379,7 @@ std::vector<RecordedRay> record_reference_rays(const RayTracer& tracer, const Re
     FluxLedger ledger;
     // The same batches and the same order within each batch as compute_reference.
     const std::uint64_t per = photons_per_replica(settings.photons, static_cast<int>(replicas), transport.emitters.size());
-    std::vector<std::uint32_t> order, scratch;
-    std::vector<glm::dvec2> emission;
+    BatchOrder batch;
     std::vector<SamplerSeeds> seeds;
     for (std::uint32_t r = 0; r < replicas; ++r) {
         transport.seeds_of(r, seeds);
@@ -394,10 +388,10 @@ std::vector<RecordedRay> record_reference_rays(const RayTracer& tracer, const Re
         acc.volume = transport.volume ? volume_sums.data() + r * pixels : nullptr;
         for (std::uint64_t first = 0; first < per; first += kBatchSize) {
             const std::uint64_t last = std::min(per, first + kBatchSize);
-            transport.batch_order(r, first, last, order, scratch, emission);
-            for (const std::uint32_t i : order) {
+            transport.batch_order(r, first, last, batch);
+            for (std::size_t j = 0; j < batch.order.size(); ++j) {
                 const std::size_t before = recorder.rays.size();
-                transport.trace(seeds.data(), first + i, emission[i], ledger, acc, recorder);
+                transport.trace(seeds.data(), first + batch.order[j], batch.emission[j], ledger, acc, recorder);
                 for (std::size_t k = before; k < recorder.rays.size(); ++k)
                     recorder.rays[k].segment = static_cast<std::uint8_t>(std::min<std::size_t>(k - before, 255));
             }

@@ -115,6 +115,15 @@ struct ShadowQuery {
     bool saturating;   // camera_volume: add_saturating (reference_volume.cpp)
 };
 
+// One batch's photon order and emission samples (Transport::batch_order). `emission` is in the traced
+// order: emission[j] belongs to photon first + order[j], so that the waves read it front to back (read
+// by photon index through the order, it was a cache miss per photon: 1 MB per batch, in Z order).
+struct BatchOrder {
+    std::vector<std::uint32_t> order;
+    std::vector<std::uint64_t> scratch;
+    std::vector<glm::dvec2> emission, by_index;
+};
+
 // Per thread: the wave's buffers, kept from chunk to chunk.
 struct WaveScratch {
     std::vector<PhotonState> photons;
@@ -157,10 +166,9 @@ struct Transport {
     // Photon i of a replica belongs to light i mod L and is that light's sample i / L: its sampler is
     // PhotonSampler(seeds[i mod L], i / L), the seeds hashed once per light and replica.
     void seeds_of(std::uint32_t replica, std::vector<SamplerSeeds>& seeds) const;
-    // The batch's photon order (photon_source.hpp); emission[i - first] receives photon i's sample
-    // values of dimensions 0 and 1, which the order is made from and its emission reads.
-    void batch_order(std::uint32_t replica, std::uint64_t first, std::uint64_t last, std::vector<std::uint32_t>& order,
-                     std::vector<std::uint32_t>& scratch, std::vector<glm::dvec2>& emission) const;
+    // The batch's photon order (photon_source.hpp) and, in that order, each photon's sample values of
+    // dimensions 0 and 1, which the order is made from and its emission reads.
+    void batch_order(std::uint32_t replica, std::uint64_t first, std::uint64_t last, BatchOrder& batch) const;
     // Photon i of a replica as it leaves its light (emission: its dimensions 0 and 1; seeds: seeds_of
     // its replica). The caller books its emitted weight w.
     PhotonState start(const SamplerSeeds* seeds, std::uint64_t i, const glm::dvec2& emission, std::uint32_t slot) const;
@@ -176,7 +184,7 @@ struct Transport {
     // Photons first + order[0 .. n) of one replica, in that order as far as the ledger's bits go, traced
     // as waves: all live photons' next segments as one batch of packet queries, then their visibility
     // queries as another (reference_wavefront.cpp). Adds to `ledger` and `acc`.
-    // emission[k]: the dimensions 0 and 1 of photon first + k (batch_order).
+    // emission[k]: the dimensions 0 and 1 of photon first + order[k] (batch_order).
     void trace_wave(std::uint32_t replica, std::uint64_t first, const std::uint32_t* order, const glm::dvec2* emission,
                     std::size_t n, FluxLedger& ledger, Accumulators& acc, WaveScratch& scratch) const;
     // The pixel a deposit at p would land in, or -1 (outside the image or behind the camera).
