@@ -51,8 +51,8 @@ struct Face {
         const LightProjection& f = tex.faces[0];
         eye = f.eye, forward = f.forward, right = f.right, up = f.up;
         x0 = f.x0, y1 = f.y1, near_depth = f.near_depth;
-        sx = f.width / (f.x1 - f.x0);
-        sy = f.height / (f.y1 - f.y0);
+        sx = f.pixels_per_x();
+        sy = f.pixels_per_y();
         perspective = f.type == ProjectionType::Perspective;
         g = &tex.maps[0];
     }

@@ -42,7 +42,7 @@ Faces hoist(const PositionsTexture& receivers, const std::vector<Image>& caustic
         o.map = caustic[f].pixels.data();
         o.eye = v.eye, o.right = v.right, o.up = v.up, o.forward = v.forward;
         o.x0 = v.x0, o.y1 = v.y1;
-        o.sx = v.width / (v.x1 - v.x0), o.sy = v.height / (v.y1 - v.y0);
+        o.sx = v.pixels_per_x(), o.sy = v.pixels_per_y();
         o.near_depth = v.near_depth;
         o.bias_unit = depth_bias * 2.0 * std::sqrt(v.texel_area());
         o.inv_texel_area = 1.0 / v.texel_area();

@@ -134,8 +134,8 @@ struct PositionsTexture {
             x *= inv_depth;
             y *= inv_depth;
         }
-        t.px = (x - f.x0) * (f.width / (f.x1 - f.x0));
-        t.py = (f.y1 - y) * (f.height / (f.y1 - f.y0));
+        t.px = (x - f.x0) * f.pixels_per_x();
+        t.py = (f.y1 - y) * f.pixels_per_y();
         if (!(t.px >= 0.0 && t.py >= 0.0 && t.px <= f.width && t.py <= f.height)) return false;
         return true;
     }

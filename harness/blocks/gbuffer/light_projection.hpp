@@ -50,6 +50,11 @@ struct LightProjection {
         return true;
     }
     bool inside(double px, double py) const { return px >= 0.0 && py >= 0.0 && px < width && py < height; }
+    // Pixels per unit of the view plane: px = (x - x0) * pixels_per_x(), py = (y1 - y) * pixels_per_y()
+    // is project() with the divisions hoisted out of a loop over points (the one definition that every
+    // such hoisted copy uses, so that all of them give the same bits).
+    double pixels_per_x() const { return width / (x1 - x0); }
+    double pixels_per_y() const { return height / (y1 - y0); }
     // Direction light travels through pixel-space point (px, py) (unit).
     glm::dvec3 ray_direction(double px, double py) const;
     // Orthographic: area of one texel perpendicular to the light [m^2].
