@@ -135,9 +135,16 @@ struct RawHit {
 
 struct RayTracer::Impl {
     RTCScene scene = nullptr;
+    // A triangle's three vertex normals side by side: a hit's shading normal reads one 36-byte record
+    // instead of the triangle's indices and three normals scattered over the mesh (on a 69k-triangle
+    // mesh, hits are incoherent and each of those reads tends to miss the cache).
+    struct CornerNormals {
+        glm::vec3 n[3];
+    };
     struct GeometryInfo {
         int object = -1;
         const ObjectInstance* instance = nullptr;
+        std::vector<CornerNormals> corner_normals;   // per triangle; empty: no vertex normals (or not a mesh)
     };
     std::vector<GeometryInfo> geometries;   // by Embree geomID
     double min_tmin = 0.0;                  // self-intersection guard scaled to the scene size
@@ -202,6 +209,14 @@ RayTracer::RayTracer(const FrameGeometry& frame) : frame_(&frame), impl_(std::ma
         Impl::GeometryInfo& info = impl_->geometries[id];
         info.object = static_cast<int>(index);
         info.instance = &inst;
+        if (!inst.analytic_sphere && !inst.heightfield && !inst.mesh.normals.empty()) {
+            const TriangleMesh& mesh = inst.mesh;
+            info.corner_normals.resize(mesh.triangles.size());
+            for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+                const glm::uvec3 tri = mesh.triangles[t];
+                info.corner_normals[t] = {{mesh.normals[tri.x], mesh.normals[tri.y], mesh.normals[tri.z]}};
+            }
+        }
         check_embree("geometry");
     }
     rtcCommitScene(impl_->scene);
@@ -278,12 +293,10 @@ Hit RayTracer::Impl::complete(const glm::dvec3& origin, const glm::dvec3& dir, c
 
         if (inst.heightfield) {
             shading_normal = inst.heightfield->sample_normal(position.x, position.y);
-        } else if (!inst.mesh.normals.empty()) {
-            const TriangleMesh& mesh = inst.mesh;
-            const glm::uvec3 tri = mesh.triangles[raw.prim_id];
+        } else if (!info.corner_normals.empty()) {
+            const CornerNormals& c = info.corner_normals[raw.prim_id];
             const double u = raw.u, v = raw.v;
-            const glm::dvec3 ns = (1.0 - u - v) * to_d(mesh.normals[tri.x]) + u * to_d(mesh.normals[tri.y]) +
-                                  v * to_d(mesh.normals[tri.z]);
+            const glm::dvec3 ns = (1.0 - u - v) * to_d(c.n[0]) + u * to_d(c.n[1]) + v * to_d(c.n[2]);
             const double ls = glm::length(ns);
             shading_normal = ls > 0.0 ? ns / ls : geometric_normal;
         } else {
@@ -360,6 +373,15 @@ void RayTracer::intersect(const RayQuery* queries, std::size_t n, Hit* hits) con
             p.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
         }
         rtcIntersect16(valid, impl_->scene, &context, &p);
+        // The packet's shading-normal records first, so that their cache misses overlap.
+        for (int k = 0; k < count; ++k) {
+            if (p.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
+            const std::vector<Impl::CornerNormals>& normals = impl_->geometries[p.hit.geomID[k]].corner_normals;
+            if (normals.empty()) continue;
+            const char* record = reinterpret_cast<const char*>(&normals[p.hit.primID[k]]);
+            __builtin_prefetch(record);
+            __builtin_prefetch(record + sizeof(Impl::CornerNormals) - 1);
+        }
         for (int k = 0; k < count; ++k) {
             const RayQuery& q = queries[first + k];
             hits[first + k] = p.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID
