@@ -1,5 +1,7 @@
 #include <caustics/reference/photon_sampler.hpp>
 
+#include <caustics/util/target_clones.hpp>
+
 namespace caustics {
 namespace {
 
@@ -109,6 +111,29 @@ void PhotonSampler::emission(const SamplerSeeds& seeds, std::uint64_t index, dou
     scrambled_pair(static_cast<std::uint32_t>(index), seeds.pair0_seed, even, odd);
     u1 = (static_cast<double>(even) + 0.5) * kTo01;
     u2 = (static_cast<double>(odd) + 0.5) * kTo01;
+}
+
+namespace {
+
+// emissions() of scrambled Sobol' indices below 2^32: integer hashes, byte-table look-ups and exact
+// conversions only, which AVX2 runs over eight indices at a time (gathers for the tables).
+CAUSTICS_AVX2_CLONES void sobol_emissions(std::uint32_t first, std::size_t n, std::uint64_t pair_seed, double* out) {
+    for (std::size_t k = 0; k < n; ++k) {
+        std::uint32_t even, odd;
+        scrambled_pair(first + static_cast<std::uint32_t>(k), pair_seed, even, odd);
+        out[2 * k] = (static_cast<double>(even) + 0.5) * kTo01;
+        out[2 * k + 1] = (static_cast<double>(odd) + 0.5) * kTo01;
+    }
+}
+
+}  // namespace
+
+void PhotonSampler::emissions(const SamplerSeeds& seeds, std::uint64_t first, std::size_t n, double* out) {
+    if (seeds.kind == SamplerKind::Sobol && n > 0 && first + n - 1 <= 0xFFFFFFFFull) {
+        sobol_emissions(static_cast<std::uint32_t>(first), n, seeds.pair0_seed, out);
+        return;
+    }
+    for (std::size_t k = 0; k < n; ++k) emission(seeds, first + k, out[2 * k], out[2 * k + 1]);
 }
 
 double PhotonSampler::get(int dim) const {

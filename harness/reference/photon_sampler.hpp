@@ -15,6 +15,7 @@
 // Independent: counter-based uniform random numbers keyed by (seed, replica, index, dimension).
 //
 // Both are pure functions of their arguments, so results do not depend on the thread count.
+#include <cstddef>
 #include <cstdint>
 #include <string>
 
@@ -49,6 +50,9 @@ public:
     static SamplerSeeds seeds(SamplerKind kind, std::uint64_t seed, std::uint32_t replica);
     // get2(0, u1, u2) of PhotonSampler(seeds, index): the emission sample values.
     static void emission(const SamplerSeeds& seeds, std::uint64_t index, double& u1, double& u2);
+    // emission() of indices first, first + 1, ..., first + n - 1: out[2 k] and out[2 k + 1] are u1 and u2
+    // of index first + k (the same values; a loop that vectorises where the indices allow).
+    static void emissions(const SamplerSeeds& seeds, std::uint64_t first, std::size_t n, double* out);
     // The value of dimension `dim` (each dimension may be read any number of times).
     double get(int dim) const;
     // Dimensions dim and dim + 1 at once (the same values as two get calls; one index hash when they

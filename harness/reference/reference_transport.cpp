@@ -39,11 +39,15 @@ void Transport::batch_order(std::uint32_t replica, std::uint64_t first, std::uin
     seeds_of(replica, seeds);
     const std::size_t lights = emitters.size();
     batch.by_index.resize(n);
-    for (std::size_t k = 0; k < n; ++k) {
-        const std::uint64_t i = first + k;
-        glm::dvec2& u = batch.by_index[k];
-        if (lights == 1) PhotonSampler::emission(seeds[0], i, u.x, u.y);
-        else PhotonSampler::emission(seeds[i % lights], i / lights, u.x, u.y);
+    static_assert(sizeof(glm::dvec2) == 2 * sizeof(double), "by_index is read as pairs of doubles");
+    if (lights == 1) {
+        PhotonSampler::emissions(seeds[0], first, n, &batch.by_index.data()->x);
+    } else {
+        for (std::size_t k = 0; k < n; ++k) {
+            const std::uint64_t i = first + k;
+            glm::dvec2& u = batch.by_index[k];
+            PhotonSampler::emission(seeds[i % lights], i / lights, u.x, u.y);
+        }
     }
     photon_batch_order(lights, first, batch.by_index, batch.order, batch.scratch);
     // One gather of independent loads here, in place of a dependent miss in every photon's start.

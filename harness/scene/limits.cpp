@@ -13,7 +13,8 @@
 //   height field, per cell: 300 (grid, triangles, normals, Embree's copy and BVH; measured 269 on the
 //                       sine scene at 1024^2 and 2048^2 cells), plus 40 per vertex for the waves
 //                       simulation and 24 per volume sample for the noise synthesis
-//   mesh: 72 per vertex and 160 per triangle (the scene's and the frame's copies, Embree's copy and BVH)
+//   mesh: 72 per vertex and 196 per triangle (the scene's and the frame's copies, Embree's copy and BVH,
+//                       and the ray tracer's 36 bytes of vertex normals per triangle)
 // Not counted: buffers of 1 MiB and more are rounded up to 2 MiB (at most 2 MiB each, small against the
 // sizes the limit guards), and up to 256 MiB of freed ones stay mapped for reuse (util/huge_pages.hpp).
 // A method's own buffers beyond one map per view are the method's; the measured peak of a reference on a
@@ -144,7 +145,7 @@ MemoryEstimate estimate_scene_memory(const Scene& scene, int replicas, int threa
             }
             e.items.push_back({object_key(k, "resolution"), what, cells * per + extra, per, "cells"});
         } else if (o.shape == ShapeType::Mesh) {
-            const double bytes = 72.0 * o.mesh.positions.size() + 160.0 * o.mesh.triangles.size();
+            const double bytes = 72.0 * o.mesh.positions.size() + 196.0 * o.mesh.triangles.size();
             e.items.push_back({object_key(k, "file"),
                                "mesh of " + format_limit(static_cast<double>(o.mesh.triangles.size())) + " triangles",
                                bytes, 0.0, ""});
