@@ -3,6 +3,7 @@
 // same integer sums and the same flux ledger. The hashes below were computed with the tracer as it was
 // before that work (commit e5aa3c1); a change of the transport or the estimators that changes them on
 // purpose must bump kReferenceVersion (reference_cache.cpp) and update them here.
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -12,6 +13,7 @@
 
 #include <caustics/frame/camera.hpp>
 #include <caustics/reference/reference.hpp>
+#include <caustics/reference/photon_source.hpp>
 #include <caustics/reference/reference_rays.hpp>
 #include <caustics/util/hash.hpp>
 #include "reference_support.hpp"
@@ -176,14 +178,14 @@ TEST(PhotonSamplerBits, SameValuesAsTheDefinition) {
 }
 
 // A batch's emission samples in one call (the loop that vectorises) are emission() of each index, bit
-// for bit: for both samplers, at odd offsets and lengths, and across index 2^32 (where the quasi-random
-// pair gives way to independent values).
+// for bit: for both samplers, at odd offsets and lengths, up to the last index of the quasi-random pair
+// (2^32 - 1), and across 2^32 (where emissions() computes one index at a time).
 TEST(PhotonSamplerBits, BatchedEmissionsEqualOneAtATime) {
     std::size_t compared = 0, mismatches = 0;
     for (SamplerKind kind : {SamplerKind::Sobol, SamplerKind::Independent})
         for (std::uint32_t replica = 0; replica < 2; ++replica) {
             const SamplerSeeds seeds = PhotonSampler::seeds(kind, 11, replica);
-            for (std::uint64_t first : {0ull, 3ull, 65536ull, 0xFFFFFFFFull - 20ull})
+            for (std::uint64_t first : {0ull, 3ull, 65536ull, 0x100000000ull - 45ull, 0xFFFFFFFFull - 20ull})
                 for (std::size_t n : {std::size_t{1}, std::size_t{7}, std::size_t{45}}) {
                     std::vector<double> out(2 * n);
                     PhotonSampler::emissions(seeds, first, n, out.data());
@@ -195,6 +197,42 @@ TEST(PhotonSamplerBits, BatchedEmissionsEqualOneAtATime) {
                     }
                 }
         }
-    EXPECT_EQ(compared, 2u * 2u * 4u * (1u + 7u + 45u));
+    EXPECT_EQ(compared, 2u * 2u * 5u * (1u + 7u + 45u));
     EXPECT_EQ(mismatches, 0u);
+}
+
+// A batch's photon order is a stable sort of its offsets by (light, Z-order cell of the emission
+// values), the cell's Morton key with the first value's bits in the even places: checked against
+// std::stable_sort for full and partial batches, one and three lights, and a first index that is not a
+// multiple of the light count.
+TEST(PhotonBatchOrder, StableSortByLightAndCell) {
+    auto cell = [](const glm::dvec2& u) {
+        const auto x = static_cast<std::uint32_t>(u.x * 256.0), y = static_cast<std::uint32_t>(u.y * 256.0);
+        std::uint32_t key = 0;
+        for (int b = 0; b < 8; ++b) key |= ((x >> b) & 1u) << (2 * b) | ((y >> b) & 1u) << (2 * b + 1);
+        return key;
+    };
+    std::uint64_t state = 12345;
+    auto uniform = [&] {   // duplicates of cells are frequent at these sizes: stability matters
+        state = state * 6364136223846793005ull + 1442695040888963407ull;
+        return static_cast<double>(state >> 11) * 0x1.0p-53;
+    };
+    std::size_t checked = 0;
+    for (std::uint64_t lights : {1ull, 3ull})
+        for (std::size_t n : {std::size_t{1000}, std::size_t{65536}}) {
+            const std::uint64_t first = 65536 * 5 + 1;
+            std::vector<glm::dvec2> values(n);
+            for (glm::dvec2& u : values) u = {uniform(), uniform()};
+            std::vector<std::uint32_t> order, expected(n);
+            std::vector<std::uint64_t> scratch;
+            photon_batch_order(lights, first, values, order, scratch);
+            for (std::size_t i = 0; i < n; ++i) expected[i] = static_cast<std::uint32_t>(i);
+            std::stable_sort(expected.begin(), expected.end(), [&](std::uint32_t a, std::uint32_t b) {
+                const std::uint64_t la = (first + a) % lights, lb = (first + b) % lights;
+                return la != lb ? la < lb : cell(values[a]) < cell(values[b]);
+            });
+            EXPECT_EQ(order, expected) << lights << " lights, " << n << " photons";
+            ++checked;
+        }
+    EXPECT_EQ(checked, 4u);
 }

@@ -39,9 +39,9 @@ void Transport::batch_order(std::uint32_t replica, std::uint64_t first, std::uin
     seeds_of(replica, seeds);
     const std::size_t lights = emitters.size();
     batch.by_index.resize(n);
-    static_assert(sizeof(glm::dvec2) == 2 * sizeof(double), "by_index is read as pairs of doubles");
+    static_assert(sizeof(glm::dvec2) == 2 * sizeof(double), "by_index is written as pairs of doubles");
     if (lights == 1) {
-        PhotonSampler::emissions(seeds[0], first, n, &batch.by_index.data()->x);
+        if (n > 0) PhotonSampler::emissions(seeds[0], first, n, reinterpret_cast<double*>(batch.by_index.data()));
     } else {
         for (std::size_t k = 0; k < n; ++k) {
             const std::uint64_t i = first + k;
