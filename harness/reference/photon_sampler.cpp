@@ -26,7 +26,8 @@ std::uint32_t lk_hash(std::uint32_t x, std::uint32_t seed) {
     return x;
 }
 
-constexpr double kTo01 = 0x1.0p-32;
+// The centre of the 2^-32 cell of a 32-bit point: in (0, 1), never exactly 0 or 1 (exact in double).
+constexpr double cell_centre(std::uint32_t x) { return (static_cast<double>(x) + 0.5) * 0x1.0p-32; }
 
 constexpr std::uint32_t sobol_dim1_loop(std::uint32_t index) {
     // Direction numbers v_k = v_{k-1} ^ (v_{k-1} >> 1), v_0 = 2^31 (Sobol' 1967; Joe and Kuo's second
@@ -91,6 +92,14 @@ void scrambled_pair(std::uint32_t index, std::uint64_t pair_seed, std::uint32_t&
     odd = reverse_bits(lk_hash(reversed_dim1_of_reversed(h), seed2 ^ 0x68bc21ebu));
 }
 
+// The emission samples (the first pair) of a Sobol' index below 2^32.
+inline void sobol_emission(std::uint32_t index, std::uint64_t pair0_seed, double& u1, double& u2) {
+    std::uint32_t even, odd;
+    scrambled_pair(index, pair0_seed, even, odd);
+    u1 = cell_centre(even);
+    u2 = cell_centre(odd);
+}
+
 }  // namespace
 
 void PhotonSampler::quasi_pair(int pair, std::uint32_t& even, std::uint32_t& odd) const {
@@ -107,10 +116,7 @@ void PhotonSampler::emission(const SamplerSeeds& seeds, std::uint64_t index, dou
         PhotonSampler(seeds, index).get2(0, u1, u2);
         return;
     }
-    std::uint32_t even, odd;
-    scrambled_pair(static_cast<std::uint32_t>(index), seeds.pair0_seed, even, odd);
-    u1 = (static_cast<double>(even) + 0.5) * kTo01;
-    u2 = (static_cast<double>(odd) + 0.5) * kTo01;
+    sobol_emission(static_cast<std::uint32_t>(index), seeds.pair0_seed, u1, u2);
 }
 
 namespace {
@@ -118,12 +124,8 @@ namespace {
 // emissions() of scrambled Sobol' indices below 2^32: integer hashes, byte-table look-ups and exact
 // conversions only, which AVX2 runs over eight indices at a time (gathers for the tables).
 CAUSTICS_AVX2_CLONES void sobol_emissions(std::uint32_t first, std::size_t n, std::uint64_t pair_seed, double* out) {
-    for (std::size_t k = 0; k < n; ++k) {
-        std::uint32_t even, odd;
-        scrambled_pair(first + static_cast<std::uint32_t>(k), pair_seed, even, odd);
-        out[2 * k] = (static_cast<double>(even) + 0.5) * kTo01;
-        out[2 * k + 1] = (static_cast<double>(odd) + 0.5) * kTo01;
-    }
+    for (std::size_t k = 0; k < n; ++k)
+        sobol_emission(first + static_cast<std::uint32_t>(k), pair_seed, out[2 * k], out[2 * k + 1]);
 }
 
 }  // namespace
@@ -142,8 +144,7 @@ double PhotonSampler::get(int dim) const {
     // "padding"); the pair is the (0,2)-sequence (van der Corput, sobol_dim1), Owen-scrambled.
     std::uint32_t even, odd;
     quasi_pair(dim >> 1, even, odd);
-    // Centre of the 2^-32 cell: never exactly 0 or 1.
-    return (static_cast<double>(dim & 1 ? odd : even) + 0.5) * kTo01;
+    return cell_centre(dim & 1 ? odd : even);
 }
 
 void PhotonSampler::get2(int dim, double& first, double& second) const {
@@ -153,8 +154,8 @@ void PhotonSampler::get2(int dim, double& first, double& second) const {
     }
     std::uint32_t even, odd;
     quasi_pair(dim >> 1, even, odd);
-    first = (static_cast<double>(even) + 0.5) * kTo01;
-    second = (static_cast<double>(odd) + 0.5) * kTo01;
+    first = cell_centre(even);
+    second = cell_centre(odd);
 }
 
 }  // namespace caustics
