@@ -90,6 +90,7 @@ private:
     std::vector<Image> caustic_;    // per face: flux per texel [W]
     double radius_used_ = 0.0;
     ReceiverScratch receiver_scratch_;   // refilled by every render
+    LookupMask lookup_mask_;             // rebuilt by every render that looks up
 };
 
 Capability CausticMapping::capabilities(const Scene& scene) const {
@@ -411,17 +412,19 @@ CausticOutput CausticMapping::render(const FrameGeometry& frame, const RenderReq
     out.stages_ms.emplace_back("splat", clock.ms());
 
     LookupCounts looked;
+    clock.reset();   // the lookup mask is timed with the first lookup stage that runs
+    if (request.receiver || request.camera) lookup_mask_.build(receivers_, caustic_);
     if (request.receiver) {
-        clock.reset();
         const ReceiverChart& chart = *request.receiver;
         const int n = s_.bin_samples > 0 ? s_.bin_samples : auto_bin_samples(receivers_, chart);
-        receiver_irradiance(out.receiver, receiver_scratch_, receivers_, caustic_, chart, n, s_.depth_bias, looked);
+        receiver_irradiance(out.receiver, receiver_scratch_, receivers_, caustic_, lookup_mask_, chart, n, s_.depth_bias,
+                            looked);
         out.stages_ms.emplace_back("receiver_lookup", clock.ms());
+        clock.reset();
     }
     if (request.camera) {
-        clock.reset();
         const CameraGBuffer& gb = *request.camera;
-        camera_irradiance(out.camera, receivers_, caustic_, gb, s_.depth_bias, looked);
+        camera_irradiance(out.camera, receivers_, caustic_, lookup_mask_, gb, s_.depth_bias, looked);
         out.stages_ms.emplace_back("camera_lookup", clock.ms());
     }
     if (s_.debug_maps) {

@@ -23,6 +23,8 @@ struct Face {
     double bias_unit = 0;       // depth_bias * two texel sides (perspective: at unit depth)
     double inv_texel_area = 0;  // 1 / LightProjection::texel_area()
     int width = 1, height = 1;
+    const std::uint64_t* mask = nullptr;   // LookupMask::face
+    int mask_words = 0;
 };
 
 struct Faces {
@@ -31,7 +33,8 @@ struct Faces {
     bool perspective = false;
 };
 
-Faces hoist(const PositionsTexture& receivers, const std::vector<Image>& caustic, double depth_bias) {
+Faces hoist(const PositionsTexture& receivers, const std::vector<Image>& caustic, const LookupMask& mask,
+            double depth_bias) {
     Faces fs;
     fs.cube = receivers.cube;
     fs.perspective = receivers.faces[0].type == ProjectionType::Perspective;
@@ -47,6 +50,7 @@ Faces hoist(const PositionsTexture& receivers, const std::vector<Image>& caustic
         o.bias_unit = depth_bias * 2.0 * std::sqrt(v.texel_area());
         o.inv_texel_area = 1.0 / v.texel_area();
         o.width = v.width, o.height = v.height;
+        o.mask = mask.face(f), o.mask_words = mask.words();
     }
     return fs;
 }
@@ -73,8 +77,10 @@ inline double irradiance_in_view(const Face& f, const glm::dvec3& v, NormalFn&& 
         ++counts.outside;
         return 0.0;
     }
+    const int tx = std::min(static_cast<int>(px), W - 1), ty = std::min(static_cast<int>(py), H - 1);
+    if (!LookupMask::test(f.mask, f.mask_words, tx, ty)) return 0.0;   // a receiver, and no flux within a texel
     const GBuffer& g = *f.g;
-    const std::size_t texel = g.index(std::min(static_cast<int>(px), W - 1), std::min(static_cast<int>(py), H - 1));
+    const std::size_t texel = g.index(tx, ty);
     if (g.id[texel] == -1) {
         ++counts.outside;
         return 0.0;
@@ -148,52 +154,13 @@ void fill_corners(std::vector<glm::dvec3>& corners, const ReceiverChart& chart, 
     });
 }
 
-// Summed-area tables ((W + 1) x (H + 1)) of the single face's texels that hold caustic flux and of its
-// texels with no receiver: a bin whose light-space footprint holds neither needs no lookup, since each of
-// its lookups would read four zero texels and count nothing.
-struct Footprints {
-    const std::int32_t* flux = nullptr;
-    const std::int32_t* empty = nullptr;
-    int stride = 0;
-    std::int32_t count(const std::int32_t* sat, int x0, int y0, int x1, int y1) const {   // texels [x0, x1] x [y0, y1]
-        const std::size_t s = static_cast<std::size_t>(stride);
-        return sat[(y1 + 1) * s + x1 + 1] - sat[y0 * s + x1 + 1] - sat[(y1 + 1) * s + x0] + sat[y0 * s + x0];
-    }
-};
-
-Footprints fill_footprints(ReceiverScratch& scratch, const Face& f) {
-    const int W = f.width, H = f.height;
-    const std::size_t stride = static_cast<std::size_t>(W) + 1;
-    scratch.flux_sat.assign(stride * (static_cast<std::size_t>(H) + 1), 0);
-    scratch.empty_sat.assign(stride * (static_cast<std::size_t>(H) + 1), 0);
-    std::int32_t* flux = scratch.flux_sat.data();
-    std::int32_t* empty = scratch.empty_sat.data();
-    tbb::parallel_for(tbb::blocked_range<int>(0, H, 16), [&](const tbb::blocked_range<int>& rows) {
-        for (int y = rows.begin(); y != rows.end(); ++y) {
-            const float* m = f.map + f.g->index(0, y);
-            const std::int32_t* id = &f.g->id[f.g->index(0, y)];
-            std::int32_t* fr = flux + (y + 1) * stride;
-            std::int32_t* er = empty + (y + 1) * stride;
-            for (int x = 0; x < W; ++x) {
-                fr[x + 1] = fr[x] + (m[x] != 0.0f);
-                er[x + 1] = er[x] + (id[x] == -1);
-            }
-        }
-    });
-    for (int y = 1; y <= H; ++y)
-        for (std::size_t x = 0; x < stride; ++x) {
-            flux[y * stride + x] += flux[(y - 1) * stride + x];
-            empty[y * stride + x] += empty[(y - 1) * stride + x];
-        }
-    return {flux, empty, static_cast<int>(stride)};
-}
-
 // True when bin (corners c[0..3], view space of face f) certainly gets no caustic: all its points lie in
-// the view (perspective: in front of the eye) and its footprint holds no flux and no empty texel. The
+// the view (perspective: in front of the eye) and no texel of its footprint has its mask bit set. The
 // points of the bin are convex combinations of its corners (in homogeneous coordinates, in perspective),
-// so they project inside the corners' bounding box; one texel of padding covers the bilinear reads.
+// so they project inside the corners' bounding box; the mask's one texel of dilation covers the bilinear
+// reads. A bin that passes is left at 0: each of its lookups would return 0 and count nothing.
 template <bool kPerspective>
-bool bin_without_caustic(const Face& f, const Footprints& fp, const glm::dvec3* const c[4]) {
+bool bin_without_caustic(const Face& f, const glm::dvec3* const c[4]) {
     double xl = 1e300, xh = -1e300, yl = 1e300, yh = -1e300;
     for (int k = 0; k < 4; ++k) {
         double x = c[k]->x, y = c[k]->y;
@@ -207,14 +174,13 @@ bool bin_without_caustic(const Face& f, const Footprints& fp, const glm::dvec3* 
     }
     constexpr double kMargin = 1e-6;   // texels: round-off of the interpolated points
     if (!(xl > kMargin && yl > kMargin && xh < f.width - kMargin && yh < f.height - kMargin)) return false;
-    const int x0 = std::max(static_cast<int>(xl) - 1, 0), x1 = std::min(static_cast<int>(xh) + 1, f.width - 1);
-    const int y0 = std::max(static_cast<int>(yl) - 1, 0), y1 = std::min(static_cast<int>(yh) + 1, f.height - 1);
-    return fp.count(fp.flux, x0, y0, x1, y1) == 0 && fp.count(fp.empty, x0, y0, x1, y1) == 0;
+    return !LookupMask::any(f.mask, f.mask_words, static_cast<int>(xl), static_cast<int>(yl), static_cast<int>(xh),
+                            static_cast<int>(yh));
 }
 
 template <bool kPerspective>
-void receiver_pass(Image& out, const std::vector<glm::dvec3>& corners, const Faces& fs, const Footprints& fp,
-                   const ReceiverChart& chart, int n, LookupCounts& counts) {
+void receiver_pass(Image& out, const std::vector<glm::dvec3>& corners, const Faces& fs, const ReceiverChart& chart,
+                   int n, LookupCounts& counts) {
     const int W = chart.width(), H = chart.height();
     const double inv_n = 1.0 / n, per_bin = static_cast<double>(n) * n, inv_w = 1.0 / W;
     tbb::combinable<LookupCounts> local;
@@ -225,7 +191,7 @@ void receiver_pass(Image& out, const std::vector<glm::dvec3>& corners, const Fac
             const glm::dvec3* hi = lo + (W + 1);
             for (int x = 0; x < W; ++x) {
                 const glm::dvec3* const bin[4] = {&lo[x], &lo[x + 1], &hi[x], &hi[x + 1]};
-                if (!fs.cube && bin_without_caustic<kPerspective>(fs.face[0], fp, bin)) continue;   // 0 already
+                if (!fs.cube && bin_without_caustic<kPerspective>(fs.face[0], bin)) continue;   // 0 already
                 // The bin's points by bilinear interpolation of its four corners: exact for a plane (the
                 // chart is affine there), a small-footprint approximation of a height field's surface
                 // within one bin. The perspective divide is done per point, so a perspective view of a
@@ -283,19 +249,18 @@ int auto_bin_samples(const PositionsTexture& receivers, const ReceiverChart& cha
 }
 
 void receiver_irradiance(Image& out, ReceiverScratch& scratch, const PositionsTexture& receivers,
-                         const std::vector<Image>& caustic, const ReceiverChart& chart, int n, double depth_bias,
-                         LookupCounts& counts) {
-    const Faces fs = hoist(receivers, caustic, depth_bias);
+                         const std::vector<Image>& caustic, const LookupMask& mask, const ReceiverChart& chart, int n,
+                         double depth_bias, LookupCounts& counts) {
+    const Faces fs = hoist(receivers, caustic, mask, depth_bias);
     out = Image(chart.width(), chart.height());   // bins without caustic are skipped: 0
     fill_corners(scratch.corners, chart, fs.cube ? nullptr : &fs.face[0]);
-    const Footprints fp = fs.cube ? Footprints{} : fill_footprints(scratch, fs.face[0]);
-    if (fs.perspective) receiver_pass<true>(out, scratch.corners, fs, fp, chart, n, counts);
-    else receiver_pass<false>(out, scratch.corners, fs, fp, chart, n, counts);
+    if (fs.perspective) receiver_pass<true>(out, scratch.corners, fs, chart, n, counts);
+    else receiver_pass<false>(out, scratch.corners, fs, chart, n, counts);
 }
 
 void camera_irradiance(Image& out, const PositionsTexture& receivers, const std::vector<Image>& caustic,
-                       const CameraGBuffer& gb, double depth_bias, LookupCounts& counts) {
-    const Faces fs = hoist(receivers, caustic, depth_bias);
+                       const LookupMask& mask, const CameraGBuffer& gb, double depth_bias, LookupCounts& counts) {
+    const Faces fs = hoist(receivers, caustic, mask, depth_bias);
     out = Image(gb.width, gb.height);   // pixels without a diffuse hit: 0
     if (fs.perspective) camera_pass<true>(out, fs, gb, counts);
     else camera_pass<false>(out, fs, gb, counts);

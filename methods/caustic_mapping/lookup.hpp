@@ -7,7 +7,8 @@
 // Every point is looked up on the fly, inside each render: nothing is kept from one render to the next
 // (the harness times repeated renders of one frame, and reused per-frame work would be left out of the
 // measured frame time). The depth bias and the texel area are needed only where the map holds caustic
-// flux, so they are computed there alone.
+// flux, so they are computed there alone; a lookup whose texel's LookupMask bit is clear (no flux and no
+// empty texel within one texel) returns 0 before reading the G-buffer or the map.
 #include <cstdint>
 #include <vector>
 
@@ -15,6 +16,7 @@
 
 #include <caustics/frame/camera.hpp>
 #include <caustics/util/image.hpp>
+#include "lookup_mask.hpp"
 #include "positions_texture.hpp"
 #include <caustics/frame/receiver_chart.hpp>
 
@@ -34,20 +36,18 @@ int auto_bin_samples(const PositionsTexture& receivers, const ReceiverChart& cha
 // Scratch space of the receiver map's pass, refilled on every call (kept only so that nothing allocates
 // after the first frame).
 struct ReceiverScratch {
-    std::vector<glm::dvec3> corners;      // the chart's bin corners
-    std::vector<std::int32_t> flux_sat;   // summed-area table: caustic-map texels holding flux
-    std::vector<std::int32_t> empty_sat;  // summed-area table: texels with no receiver
+    std::vector<glm::dvec3> corners;   // the chart's bin corners
 };
 
 // The receiver map (`out` is resized to the chart): the mean of n x n stratified lookups per bin (n = 1:
-// the bin centre, as the paper's per-pixel lookup).
+// the bin centre, as the paper's per-pixel lookup). `mask`: built from `receivers` and `caustic`.
 void receiver_irradiance(Image& out, ReceiverScratch& scratch, const PositionsTexture& receivers,
-                         const std::vector<Image>& caustic, const ReceiverChart& chart, int n, double depth_bias,
-                         LookupCounts& counts);
+                         const std::vector<Image>& caustic, const LookupMask& mask, const ReceiverChart& chart, int n,
+                         double depth_bias, LookupCounts& counts);
 
 // The camera view (`out` is resized to the camera): one lookup per pixel whose primary hit is diffuse,
 // 0 elsewhere.
 void camera_irradiance(Image& out, const PositionsTexture& receivers, const std::vector<Image>& caustic,
-                       const CameraGBuffer& gb, double depth_bias, LookupCounts& counts);
+                       const LookupMask& mask, const CameraGBuffer& gb, double depth_bias, LookupCounts& counts);
 
 }  // namespace caustics::caustic_mapping

@@ -1,0 +1,183 @@
+// caustic_mapping: the lookup mask (lookup_mask.hpp). Its bits against their definition (flux or no
+// receiver within one texel), its box query against a scan, and the receiver-map and camera lookups with
+// the mask against the same lookups with every bit set (nothing skipped), bit for bit with the same
+// counts: orthographic, perspective and cube-map views of sphere.json's floor with an occluder above it
+// (shadowed lookups), a sparse caustic map and camera points beside the window (outside lookups).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstring>
+#include <random>
+#include <vector>
+
+#include "../lookup.hpp"
+#include "../lookup_mask.hpp"
+#include "method_support.hpp"
+#include <caustics/blocks/gbuffer/gbuffer_raster.hpp>
+#include <caustics/frame/frame.hpp>
+
+using namespace caustics;
+using namespace caustics::caustic_mapping;
+
+namespace {
+
+// The definition: flux != 0 (NaN included) or id -1 in the 3 x 3 block around (x, y), clamped.
+bool expected_bit(const GBuffer& g, const Image& flux, int x, int y) {
+    for (int j = std::max(0, y - 1); j <= std::min(g.height - 1, y + 1); ++j)
+        for (int i = std::max(0, x - 1); i <= std::min(g.width - 1, x + 1); ++i)
+            if (flux.at(i, j) != 0.0f || g.id[g.index(i, j)] == -1) return true;
+    return false;
+}
+
+// Random ids (about 5 % empty, in runs) and a sparse caustic map (blobs, a NaN, a denormal).
+void random_face(GBuffer& g, Image& flux, int size, std::mt19937& rng) {
+    g.clear(size, size);
+    flux = Image(size, size);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    for (std::size_t i = 0; i < g.id.size(); ++i) g.id[i] = u(rng) < 0.01f ? -1 : (i > 0 && g.id[i - 1] == -1 && u(rng) < 0.7f ? -1 : 0);
+    for (int b = 0; b < 6; ++b) {
+        const int cx = static_cast<int>(u(rng) * size), cy = static_cast<int>(u(rng) * size), r = 1 + b % 3;
+        for (int y = std::max(0, cy - r); y < std::min(size, cy + r); ++y)
+            for (int x = std::max(0, cx - r); x < std::min(size, cx + r); ++x) flux.at(x, y) = u(rng);
+    }
+    flux.at(size - 1, size / 2) = std::numeric_limits<float>::quiet_NaN();
+    flux.at(0, size - 1) = 1e-42f;
+}
+
+TEST(LookupMask, BitsMatchTheirDefinition) {
+    std::mt19937 rng(7);
+    for (int size : {2, 5, 63, 64, 65, 130}) {
+        PositionsTexture tex;
+        tex.maps.resize(2);
+        std::vector<Image> flux(2);
+        for (int f = 0; f < 2; ++f) random_face(tex.maps[static_cast<std::size_t>(f)], flux[static_cast<std::size_t>(f)], size, rng);
+        LookupMask mask;
+        mask.build(tex, flux);
+        int set = 0, clear = 0;
+        for (std::size_t f = 0; f < 2; ++f)
+            for (int y = 0; y < size; ++y)
+                for (int x = 0; x < size; ++x) {
+                    const bool bit = LookupMask::test(mask.face(f), mask.words(), x, y);
+                    ASSERT_EQ(bit, expected_bit(tex.maps[f], flux[f], x, y)) << "size " << size << " face " << f << " texel " << x << ", " << y;
+                    (bit ? set : clear)++;
+                }
+        if (size >= 63) EXPECT_GT(clear, 0) << size;
+        EXPECT_GT(set, 0) << size;
+        // Box queries against a scan of the bits.
+        std::uniform_int_distribution<int> at(0, size - 1);
+        for (int k = 0; k < 2000; ++k) {
+            int x0 = at(rng), x1 = at(rng), y0 = at(rng), y1 = at(rng);
+            if (x0 > x1) std::swap(x0, x1);
+            if (y0 > y1) std::swap(y0, y1);
+            bool scan = false;
+            for (int y = y0; y <= y1; ++y)
+                for (int x = x0; x <= x1; ++x) scan = scan || LookupMask::test(mask.face(1), mask.words(), x, y);
+            ASSERT_EQ(LookupMask::any(mask.face(1), mask.words(), x0, y0, x1, y1), scan)
+                << "size " << size << " box " << x0 << ".." << x1 << " x " << y0 << ".." << y1;
+        }
+    }
+}
+
+// sphere.json's floor, and a 0.6 m square occluder 0.5 m above it, rasterised into `faces`.
+PositionsTexture floor_texture(const FrameGeometry& frame, std::vector<LightProjection> faces, bool cube) {
+    PositionsTexture tex;
+    tex.faces = std::move(faces);
+    tex.cube = cube;
+    tex.maps.resize(tex.faces.size());
+    const TriangleMesh& floor = frame.receiver().mesh;
+    const std::vector<glm::vec3> lid = {{-0.3f, -0.3f, 0.5f}, {0.3f, -0.3f, 0.5f}, {-0.3f, 0.3f, 0.5f}, {0.3f, 0.3f, 0.5f}};
+    const std::vector<glm::vec3> up(4, glm::vec3(0, 0, 1));
+    const std::vector<glm::uvec3> lid_tris = {{0, 1, 3}, {0, 3, 2}};
+    GBufferRaster raster;
+    for (std::size_t f = 0; f < tex.faces.size(); ++f) {
+        tex.maps[f].clear(tex.faces[f].width, tex.faces[f].height, DepthTest::Less, false);
+        raster.draw(tex.faces[f], {floor.positions, floor.normals, floor.triangles, 0}, CullMode::None, DepthTest::Less, tex.maps[f]);
+        raster.draw(tex.faces[f], {lid, up, lid_tris, 1}, CullMode::None, DepthTest::Less, tex.maps[f]);
+    }
+    return tex;
+}
+
+// Camera points: on the floor (some beyond the light's window), on the occluder, and a few not covered.
+CameraGBuffer camera_points(std::mt19937& rng) {
+    CameraGBuffer gb;
+    gb.width = 96, gb.height = 64;
+    const std::size_t n = static_cast<std::size_t>(gb.width * gb.height);
+    gb.covered.assign(n, 1);
+    gb.position.resize(n);
+    gb.normal.assign(n, glm::vec3(0, 0, 1));
+    std::uniform_real_distribution<float> u(-2.6f, 2.6f), v(0.0f, 1.0f);
+    for (std::size_t i = 0; i < n; ++i) {
+        const float r = v(rng);
+        if (r < 0.05f) gb.covered[i] = 0;
+        else if (r < 0.15f) gb.position[i] = {0.6f * v(rng) - 0.3f, 0.6f * v(rng) - 0.3f, 0.5f};
+        else gb.position[i] = {u(rng), u(rng), 0.0f};
+    }
+    return gb;
+}
+
+bool same_pixels(const Image& a, const Image& b) {
+    return a.width == b.width && a.height == b.height &&
+           std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size() * sizeof(float)) == 0;
+}
+
+TEST(LookupMask, LookupsEqualLookupsWithoutTheMask) {
+    Scene scene = load_scene("scenes/sphere.json");
+    const FrameGeometry frame = build_frame_geometry(scene, 0);
+    const ReceiverChart chart(frame, 48, 40);
+    const glm::dvec3 eye = scene.lights[0].position;
+    const int map = 160;
+    LightProjection persp;
+    ASSERT_TRUE(fit_perspective(eye, frame.receiver().bounds, map, map, persp, 80.0));
+    const std::array<LightProjection, 6> cube = cube_faces(eye, map);
+    struct Case {
+        const char* name;
+        PositionsTexture tex;
+    };
+    const Case cases[] = {
+        {"orthographic", floor_texture(frame, {fit_orthographic(glm::normalize(glm::dvec3(0.2, -0.1, -1)), frame.receiver().bounds, map, map)}, false)},
+        {"perspective", floor_texture(frame, {persp}, false)},
+        {"cube", floor_texture(frame, std::vector<LightProjection>(cube.begin(), cube.end()), true)},
+    };
+    std::mt19937 rng(11);
+    const CameraGBuffer gb = camera_points(rng);
+    for (const Case& c : cases) {
+        // A sparse caustic map: blobs over the floor, and flux over the occluder.
+        std::vector<Image> flux(c.tex.faces.size(), Image(map, map)), ones(c.tex.faces.size(), Image(map, map));
+        std::uniform_real_distribution<float> u(0.0f, 1.0f);
+        for (std::size_t f = 0; f < flux.size(); ++f) {
+            std::fill(ones[f].pixels.begin(), ones[f].pixels.end(), 1.0f);
+            for (int b = 0; b < 12; ++b) {
+                const int cx = static_cast<int>(u(rng) * map), cy = static_cast<int>(u(rng) * map), r = 2 + b % 9;
+                for (int y = std::max(0, cy - r); y < std::min(map, cy + r); ++y)
+                    for (int x = std::max(0, cx - r); x < std::min(map, cx + r); ++x) flux[f].at(x, y) = u(rng);
+            }
+            for (std::size_t i = 0; i < flux[f].pixels.size(); ++i)   // the occluder's texels: lookups under it fail the depth test
+                if (c.tex.maps[f].id[i] == 1) flux[f].pixels[i] = u(rng);
+        }
+        LookupMask mask, every;
+        mask.build(c.tex, flux);
+        every.build(c.tex, ones);   // every bit set: no lookup is skipped
+        for (int n : {1, 3}) {
+            Image with, without;
+            ReceiverScratch scratch;
+            LookupCounts cw, co;
+            receiver_irradiance(with, scratch, c.tex, flux, mask, chart, n, 1.0, cw);
+            receiver_irradiance(without, scratch, c.tex, flux, every, chart, n, 1.0, co);
+            EXPECT_TRUE(same_pixels(with, without)) << c.name << " receiver n " << n;
+            EXPECT_EQ(cw.outside, co.outside) << c.name << " receiver n " << n;
+            EXPECT_EQ(cw.shadowed, co.shadowed) << c.name << " receiver n " << n;
+            EXPECT_GT(std::count_if(with.pixels.begin(), with.pixels.end(), [](float p) { return p > 0.0f; }), 0) << c.name;
+        }
+        Image with, without;
+        LookupCounts cw, co;
+        camera_irradiance(with, c.tex, flux, mask, gb, 1.0, cw);
+        camera_irradiance(without, c.tex, flux, every, gb, 1.0, co);
+        EXPECT_TRUE(same_pixels(with, without)) << c.name << " camera";
+        EXPECT_EQ(cw.outside, co.outside) << c.name << " camera";
+        EXPECT_EQ(cw.shadowed, co.shadowed) << c.name << " camera";
+        EXPECT_GT(co.shadowed, 0) << c.name << ": the occluder shadows some lookups with flux";
+        EXPECT_GT(std::count_if(with.pixels.begin(), with.pixels.end(), [](float p) { return p > 0.0f; }), 0) << c.name;
+    }
+}
+
+}  // namespace
