@@ -9,6 +9,8 @@
 #include <tbb/combinable.h>
 #include <tbb/parallel_for.h>
 
+#include "simd.hpp"
+
 namespace caustics::caustic_mapping {
 namespace {
 
@@ -55,23 +57,14 @@ Faces hoist(const PositionsTexture& receivers, const std::vector<Image>& caustic
     return fs;
 }
 
-// Irradiance at a receiver point given by its coordinates v = (x, y, depth) in face f's view space;
-// `normal()` gives its unit normal (world space) and is called only where the caustic map holds flux (the
-// depth bias and the texel area need it).
+// Irradiance at a receiver point given by its coordinates v = (x, y, depth) in face f's view space, in
+// front of the eye in perspective (depth > near_depth), and by its texel coordinates (px, py) and 1 / depth
+// (1 when orthographic) from project(); `normal()` gives its unit normal (world space) and is called only
+// where the caustic map holds flux (the depth bias and the texel area need it).
 template <bool kPerspective, class NormalFn>
-inline double irradiance_in_view(const Face& f, const glm::dvec3& v, NormalFn&& normal, LookupCounts& counts) {
+inline double irradiance_at_texel(const Face& f, const glm::dvec3& v, double inv_depth, double px, double py,
+                                  NormalFn&& normal, LookupCounts& counts) {
     const double depth = v.z;
-    double x = v.x, y = v.y, inv_depth = 1.0;
-    if constexpr (kPerspective) {
-        if (!(depth > f.near_depth)) {
-            ++counts.outside;
-            return 0.0;
-        }
-        inv_depth = 1.0 / depth;
-        x *= inv_depth;
-        y *= inv_depth;
-    }
-    const double px = (x - f.x0) * f.sx, py = (f.y1 - y) * f.sy;
     const int W = f.width, H = f.height;
     if (!(px >= 0.0 && py >= 0.0 && px <= W && py <= H)) {
         ++counts.outside;
@@ -127,6 +120,34 @@ inline double irradiance_in_view(const Face& f, const glm::dvec3& v, NormalFn&& 
     return static_cast<double>(flux) * static_cast<float>(inv_area);
 }
 
+// Texel coordinates (px, py) of view-space point v (perspective: in front of the eye), and 1 / depth.
+template <bool kPerspective>
+inline void project(const Face& f, const glm::dvec3& v, double& inv_depth, double& px, double& py) {
+    double x = v.x, y = v.y;
+    inv_depth = 1.0;
+    if constexpr (kPerspective) {
+        inv_depth = 1.0 / v.z;
+        x *= inv_depth;
+        y *= inv_depth;
+    }
+    px = (x - f.x0) * f.sx, py = (f.y1 - y) * f.sy;
+}
+
+// Irradiance at view-space point v of face f (irradiance_at_texel; a point behind the near plane is
+// outside the view).
+template <bool kPerspective, class NormalFn>
+inline double irradiance_in_view(const Face& f, const glm::dvec3& v, NormalFn&& normal, LookupCounts& counts) {
+    if constexpr (kPerspective) {
+        if (!(v.z > f.near_depth)) {
+            ++counts.outside;
+            return 0.0;
+        }
+    }
+    double inv_depth, px, py;
+    project<kPerspective>(f, v, inv_depth, px, py);
+    return irradiance_at_texel<kPerspective>(f, v, inv_depth, px, py, normal, counts);
+}
+
 glm::dvec3 to_view(const Face& f, const glm::dvec3& p) {
     const glm::dvec3 d = p - f.eye;
     return {glm::dot(d, f.right), glm::dot(d, f.up), glm::dot(d, f.forward)};
@@ -137,6 +158,53 @@ template <bool kPerspective, class NormalFn>
 inline double irradiance_at(const Faces& fs, const glm::dvec3& p, NormalFn&& normal, LookupCounts& counts) {
     const Face& f = fs.face[fs.cube ? static_cast<std::size_t>(cube_face_of(p - fs.face[0].eye)) : 0];
     return irradiance_in_view<kPerspective>(f, to_view(f, p), normal, counts);
+}
+
+// One row of points (camera G-buffer positions) in the single face: view-space coordinates, 1 / depth and
+// texel coordinates, by the operations of to_view() and project() in the same order (the method is
+// compiled without FMA contraction), so with the same bits, but four or eight points at a time (the
+// divisions dominate a scalar lookup's front half). Points behind the near plane get values that the
+// caller does not use.
+struct RowLanes {
+    std::vector<double> vx, vy, vz, inv_depth, px, py;
+    void resize(std::size_t n) {
+        for (std::vector<double>* v : {&vx, &vy, &vz, &inv_depth, &px, &py}) v->resize(n);
+    }
+};
+
+CAUSTICS_AVX2_CLONES
+void project_row(const Face& f, bool perspective, const glm::vec3* p, int n, RowLanes& r) {
+    const double ex = f.eye.x, ey = f.eye.y, ez = f.eye.z;
+    const double rx = f.right.x, ry = f.right.y, rz = f.right.z, ux = f.up.x, uy = f.up.y, uz = f.up.z;
+    const double fx = f.forward.x, fy = f.forward.y, fz = f.forward.z;
+    const double x0 = f.x0, y1 = f.y1, sx = f.sx, sy = f.sy;
+    double* __restrict vx = r.vx.data();
+    double* __restrict vy = r.vy.data();
+    double* __restrict vz = r.vz.data();
+    double* __restrict inv = r.inv_depth.data();
+    double* __restrict px = r.px.data();
+    double* __restrict py = r.py.data();
+    const float* __restrict q = &p[0].x;
+    if (perspective) {
+#pragma omp simd
+        for (int i = 0; i < n; ++i) {
+            const double dx = static_cast<double>(q[3 * i]) - ex, dy = static_cast<double>(q[3 * i + 1]) - ey,
+                         dz = static_cast<double>(q[3 * i + 2]) - ez;
+            const double x = dx * rx + dy * ry + dz * rz, y = dx * ux + dy * uy + dz * uz, z = dx * fx + dy * fy + dz * fz;
+            const double id = 1.0 / z;
+            vx[i] = x, vy[i] = y, vz[i] = z, inv[i] = id;
+            px[i] = (x * id - x0) * sx, py[i] = (y1 - y * id) * sy;
+        }
+    } else {
+#pragma omp simd
+        for (int i = 0; i < n; ++i) {
+            const double dx = static_cast<double>(q[3 * i]) - ex, dy = static_cast<double>(q[3 * i + 1]) - ey,
+                         dz = static_cast<double>(q[3 * i + 2]) - ez;
+            const double x = dx * rx + dy * ry + dz * rz, y = dx * ux + dy * uy + dz * uz, z = dx * fx + dy * fy + dz * fz;
+            vx[i] = x, vy[i] = y, vz[i] = z, inv[i] = 1.0;
+            px[i] = (x - x0) * sx, py[i] = (y1 - y) * sy;
+        }
+    }
 }
 
 // The chart's bin corners, (W + 1) x (H + 1), row-major: in the view space of the single face (the view
@@ -221,6 +289,29 @@ void camera_pass(Image& out, const Faces& fs, const CameraGBuffer& gb, LookupCou
     tbb::combinable<LookupCounts> local;
     tbb::parallel_for(tbb::blocked_range<int>(0, gb.height, 4), [&](const tbb::blocked_range<int>& rows) {
         LookupCounts& c = local.local();
+        if (!fs.cube) {   // one face: each row's front half in lanes
+            const Face& f = fs.face[0];
+            RowLanes lanes;
+            lanes.resize(static_cast<std::size_t>(gb.width));
+            for (int y = rows.begin(); y != rows.end(); ++y) {
+                project_row(f, kPerspective, &gb.position[gb.index(0, y)], gb.width, lanes);
+                for (int x = 0; x < gb.width; ++x) {
+                    const std::size_t i = gb.index(x, y);
+                    if (!gb.covered[i]) continue;
+                    const glm::dvec3 v(lanes.vx[static_cast<std::size_t>(x)], lanes.vy[static_cast<std::size_t>(x)],
+                                       lanes.vz[static_cast<std::size_t>(x)]);
+                    if (kPerspective && !(v.z > f.near_depth)) {
+                        ++c.outside;
+                        continue;   // 0
+                    }
+                    auto normal = [&] { return glm::dvec3(gb.normal[i]); };
+                    out.at(x, y) = static_cast<float>(irradiance_at_texel<kPerspective>(
+                        f, v, lanes.inv_depth[static_cast<std::size_t>(x)], lanes.px[static_cast<std::size_t>(x)],
+                        lanes.py[static_cast<std::size_t>(x)], normal, c));
+                }
+            }
+            return;
+        }
         for (int y = rows.begin(); y != rows.end(); ++y)
             for (int x = 0; x < gb.width; ++x) {
                 const std::size_t i = gb.index(x, y);
