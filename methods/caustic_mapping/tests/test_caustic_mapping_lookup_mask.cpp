@@ -2,7 +2,8 @@
 // receiver within one texel), its box query against a scan, and the receiver-map and camera lookups with
 // the mask against the same lookups with every bit set (nothing skipped), bit for bit with the same
 // counts: orthographic, perspective and cube-map views of sphere.json's floor with an occluder above it
-// (shadowed lookups), a sparse caustic map and camera points beside the window (outside lookups).
+// (shadowed lookups), a sparse caustic map and camera points beside the window (outside lookups). The
+// camera rows computed in lanes against the same points looked up one at a time.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -176,6 +177,23 @@ TEST(LookupMask, LookupsEqualLookupsWithoutTheMask) {
         EXPECT_EQ(cw.outside, co.outside) << c.name << " camera";
         EXPECT_EQ(cw.shadowed, co.shadowed) << c.name << " camera";
         EXPECT_GT(co.shadowed, 0) << c.name << ": the occluder shadows some lookups with flux";
+        if (!c.tex.cube) {
+            // The single face's rows go through lanes (project_row); a "cube" of six copies of that face
+            // takes the one-point-at-a-time path: the same bits and counts.
+            PositionsTexture six = c.tex;
+            six.cube = true;
+            six.faces.assign(6, c.tex.faces[0]);
+            six.maps.assign(6, c.tex.maps[0]);
+            const std::vector<Image> flux6(6, flux[0]);
+            LookupMask mask6;
+            mask6.build(six, flux6);
+            Image one_by_one;
+            LookupCounts c6;
+            camera_irradiance(one_by_one, six, flux6, mask6, gb, 1.0, c6);
+            EXPECT_TRUE(same_pixels(with, one_by_one)) << c.name << " camera, lanes against one point at a time";
+            EXPECT_EQ(cw.outside, c6.outside) << c.name;
+            EXPECT_EQ(cw.shadowed, c6.shadowed) << c.name;
+        }
         EXPECT_GT(std::count_if(with.pixels.begin(), with.pixels.end(), [](float p) { return p > 0.0f; }), 0) << c.name;
     }
 }
