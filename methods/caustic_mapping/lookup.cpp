@@ -207,37 +207,87 @@ void project_row(const Face& f, bool perspective, const glm::vec3* p, int n, Row
     }
 }
 
+// The receiver map's n points q_a = left + (a + 1/2) step (a < n) of one row of a bin, as project_row.
+CAUSTICS_AVX2_CLONES
+void project_samples(const Face& f, bool perspective, const glm::dvec3& left, const glm::dvec3& step, int n,
+                     RowLanes& r) {
+    const double x0 = f.x0, y1 = f.y1, sx = f.sx, sy = f.sy;
+    double* __restrict vx = r.vx.data();
+    double* __restrict vy = r.vy.data();
+    double* __restrict vz = r.vz.data();
+    double* __restrict inv = r.inv_depth.data();
+    double* __restrict px = r.px.data();
+    double* __restrict py = r.py.data();
+    if (perspective) {
+#pragma omp simd
+        for (int a = 0; a < n; ++a) {
+            const double s = a + 0.5;
+            const double x = left.x + s * step.x, y = left.y + s * step.y, z = left.z + s * step.z;
+            const double id = 1.0 / z;
+            vx[a] = x, vy[a] = y, vz[a] = z, inv[a] = id;
+            px[a] = (x * id - x0) * sx, py[a] = (y1 - y * id) * sy;
+        }
+    } else {
+#pragma omp simd
+        for (int a = 0; a < n; ++a) {
+            const double s = a + 0.5;
+            const double x = left.x + s * step.x, y = left.y + s * step.y, z = left.z + s * step.z;
+            vx[a] = x, vy[a] = y, vz[a] = z, inv[a] = 1.0;
+            px[a] = (x - x0) * sx, py[a] = (y1 - y) * sy;
+        }
+    }
+}
+
 // The chart's bin corners, (W + 1) x (H + 1), row-major: in the view space of the single face (the view
 // transform is affine, so interpolating there is interpolating in the world), or world points for a cube
 // map (`view` null), whose samples pick their face one by one.
-void fill_corners(std::vector<glm::dvec3>& corners, const ReceiverChart& chart, const Face* view) {
+// With a single face, also each corner's texel coordinates for the bin test (bin_without_caustic), once
+// per corner instead of once per bin that shares it; `front`: in front of the eye (perspective).
+template <bool kPerspective>
+void fill_corners(ReceiverScratch& scratch, const ReceiverChart& chart, const Face* view) {
     const int W = chart.width(), H = chart.height();
-    corners.resize(static_cast<std::size_t>(W + 1) * static_cast<std::size_t>(H + 1));
+    const std::size_t count = static_cast<std::size_t>(W + 1) * static_cast<std::size_t>(H + 1);
+    scratch.corners.resize(count);
+    if (view) {
+        scratch.corner_px.resize(count);
+        scratch.corner_py.resize(count);
+        scratch.corner_front.resize(count);
+    }
     tbb::parallel_for(tbb::blocked_range<int>(0, H + 1, 8), [&](const tbb::blocked_range<int>& rows) {
         for (int j = rows.begin(); j != rows.end(); ++j)
             for (int i = 0; i <= W; ++i) {
+                const std::size_t k = static_cast<std::size_t>(j) * static_cast<std::size_t>(W + 1) + static_cast<std::size_t>(i);
                 const glm::dvec3 p = chart.point(static_cast<double>(i) / W, static_cast<double>(j) / H);
-                corners[static_cast<std::size_t>(j) * (W + 1) + i] = view ? to_view(*view, p) : p;
+                if (!view) {
+                    scratch.corners[k] = p;
+                    continue;
+                }
+                const Face& f = *view;
+                const glm::dvec3 c = to_view(f, p);
+                scratch.corners[k] = c;
+                double x = c.x, y = c.y;
+                bool front = true;
+                if constexpr (kPerspective) {
+                    front = c.z > f.near_depth;
+                    x /= c.z;
+                    y /= c.z;
+                }
+                scratch.corner_front[k] = front;
+                scratch.corner_px[k] = (x - f.x0) * f.sx, scratch.corner_py[k] = (f.y1 - y) * f.sy;
             }
     });
 }
 
-// True when bin (corners c[0..3], view space of face f) certainly gets no caustic: all its points lie in
+// True when bin (corners c[0..3], indices into the scratch's corners) certainly gets no caustic: all its points lie in
 // the view (perspective: in front of the eye) and no texel of its footprint has its mask bit set. The
 // points of the bin are convex combinations of its corners (in homogeneous coordinates, in perspective),
 // so they project inside the corners' bounding box; the mask's one texel of dilation covers the bilinear
 // reads. A bin that passes is left at 0: each of its lookups would return 0 and count nothing.
-template <bool kPerspective>
-bool bin_without_caustic(const Face& f, const glm::dvec3* const c[4]) {
+bool bin_without_caustic(const Face& f, const ReceiverScratch& scratch, const std::size_t c[4]) {
     double xl = 1e300, xh = -1e300, yl = 1e300, yh = -1e300;
     for (int k = 0; k < 4; ++k) {
-        double x = c[k]->x, y = c[k]->y;
-        if constexpr (kPerspective) {
-            if (!(c[k]->z > f.near_depth)) return false;
-            x /= c[k]->z;
-            y /= c[k]->z;
-        }
-        const double px = (x - f.x0) * f.sx, py = (f.y1 - y) * f.sy;
+        if (!scratch.corner_front[c[k]]) return false;
+        const double px = scratch.corner_px[c[k]], py = scratch.corner_py[c[k]];
         xl = std::min(xl, px), xh = std::max(xh, px), yl = std::min(yl, py), yh = std::max(yh, py);
     }
     constexpr double kMargin = 1e-6;   // texels: round-off of the interpolated points
@@ -246,8 +296,63 @@ bool bin_without_caustic(const Face& f, const glm::dvec3* const c[4]) {
                             static_cast<int>(yh));
 }
 
+// The receiver map of a single face: bins whose footprint's mask bits are all clear are skipped (left at
+// 0), and each row of a bin's n x n points is projected in lanes (project_samples) before the scalar
+// lookups. With a plane for receiver (kPlane) the normal is the chart's one normal, so the lookups' dot
+// products with it do not change from point to point.
+template <bool kPerspective, bool kPlane>
+void receiver_single_face(Image& out, const ReceiverScratch& scratch, const Face& f, const ReceiverChart& chart, int n,
+                          LookupCounts& counts) {
+    const int W = chart.width(), H = chart.height();
+    const double inv_n = 1.0 / n, per_bin = static_cast<double>(n) * n, inv_w = 1.0 / W;
+    const glm::dvec3 plane_normal = kPlane ? chart.normal(0.5, 0.5) : glm::dvec3(0.0);
+    const std::vector<glm::dvec3>& corners = scratch.corners;
+    tbb::combinable<LookupCounts> local;
+    tbb::parallel_for(tbb::blocked_range<int>(0, H, 4), [&](const tbb::blocked_range<int>& rows) {
+        LookupCounts& c = local.local();
+        RowLanes lanes;
+        lanes.resize(static_cast<std::size_t>(n));
+        for (int y = rows.begin(); y != rows.end(); ++y) {
+            const std::size_t row = static_cast<std::size_t>(y) * static_cast<std::size_t>(W + 1);
+            const glm::dvec3* lo = &corners[row];
+            const glm::dvec3* hi = lo + (W + 1);
+            for (int x = 0; x < W; ++x) {
+                const std::size_t k = row + static_cast<std::size_t>(x);
+                const std::size_t bin[4] = {k, k + 1, k + static_cast<std::size_t>(W + 1), k + static_cast<std::size_t>(W + 2)};
+                if (bin_without_caustic(f, scratch, bin)) continue;   // 0 already
+                // The bin's points by bilinear interpolation of its four corners (receiver_pass).
+                double sum = 0.0;
+                for (int b = 0; b < n; ++b) {
+                    const double v = (b + 0.5) * inv_n;
+                    const glm::dvec3 left = lo[x] + v * (hi[x] - lo[x]);
+                    const glm::dvec3 step = (lo[x + 1] + v * (hi[x + 1] - lo[x + 1]) - left) * inv_n;
+                    const double t = (y + v) / H;
+                    project_samples(f, kPerspective, left, step, n, lanes);
+                    for (int a = 0; a < n; ++a) {
+                        const std::size_t i = static_cast<std::size_t>(a);
+                        const glm::dvec3 q(lanes.vx[i], lanes.vy[i], lanes.vz[i]);
+                        if (kPerspective && !(q.z > f.near_depth)) {
+                            ++c.outside;
+                            sum += 0.0;
+                            continue;
+                        }
+                        auto normal = [&] {
+                            if constexpr (kPlane) return plane_normal;
+                            else return chart.normal((x + (a + 0.5) * inv_n) * inv_w, t);
+                        };
+                        sum += irradiance_at_texel<kPerspective>(f, q, lanes.inv_depth[i], lanes.px[i], lanes.py[i], normal, c);
+                    }
+                }
+                out.at(x, y) = static_cast<float>(sum / per_bin);
+            }
+        }
+    });
+    local.combine_each([&](const LookupCounts& c) { counts.outside += c.outside, counts.shadowed += c.shadowed; });
+}
+
+// The receiver map of a cube map: each point picks its face.
 template <bool kPerspective>
-void receiver_pass(Image& out, const std::vector<glm::dvec3>& corners, const Faces& fs, const ReceiverChart& chart,
+void receiver_cube(Image& out, const std::vector<glm::dvec3>& corners, const Faces& fs, const ReceiverChart& chart,
                    int n, LookupCounts& counts) {
     const int W = chart.width(), H = chart.height();
     const double inv_n = 1.0 / n, per_bin = static_cast<double>(n) * n, inv_w = 1.0 / W;
@@ -258,8 +363,6 @@ void receiver_pass(Image& out, const std::vector<glm::dvec3>& corners, const Fac
             const glm::dvec3* lo = &corners[static_cast<std::size_t>(y) * (W + 1)];
             const glm::dvec3* hi = lo + (W + 1);
             for (int x = 0; x < W; ++x) {
-                const glm::dvec3* const bin[4] = {&lo[x], &lo[x + 1], &hi[x], &hi[x + 1]};
-                if (!fs.cube && bin_without_caustic<kPerspective>(fs.face[0], bin)) continue;   // 0 already
                 // The bin's points by bilinear interpolation of its four corners: exact for a plane (the
                 // chart is affine there), a small-footprint approximation of a height field's surface
                 // within one bin. The perspective divide is done per point, so a perspective view of a
@@ -271,10 +374,9 @@ void receiver_pass(Image& out, const std::vector<glm::dvec3>& corners, const Fac
                     const glm::dvec3 step = (lo[x + 1] + v * (hi[x + 1] - lo[x + 1]) - left) * inv_n;
                     const double t = (y + v) / H;
                     for (int a = 0; a < n; ++a) {
-                        const glm::dvec3 q = left + (a + 0.5) * step;   // view space, or world (cube)
+                        const glm::dvec3 q = left + (a + 0.5) * step;   // world space
                         auto normal = [&] { return chart.normal((x + (a + 0.5) * inv_n) * inv_w, t); };
-                        sum += fs.cube ? irradiance_at<kPerspective>(fs, q, normal, c)
-                                       : irradiance_in_view<kPerspective>(fs.face[0], q, normal, c);
+                        sum += irradiance_at<kPerspective>(fs, q, normal, c);
                     }
                 }
                 out.at(x, y) = static_cast<float>(sum / per_bin);
@@ -344,9 +446,19 @@ void receiver_irradiance(Image& out, ReceiverScratch& scratch, const PositionsTe
                          double depth_bias, LookupCounts& counts) {
     const Faces fs = hoist(receivers, caustic, mask, depth_bias);
     out = Image(chart.width(), chart.height());   // bins without caustic are skipped: 0
-    fill_corners(scratch.corners, chart, fs.cube ? nullptr : &fs.face[0]);
-    if (fs.perspective) receiver_pass<true>(out, scratch.corners, fs, chart, n, counts);
-    else receiver_pass<false>(out, scratch.corners, fs, chart, n, counts);
+    const Face* single = fs.cube ? nullptr : &fs.face[0];
+    if (fs.perspective) fill_corners<true>(scratch, chart, single);
+    else fill_corners<false>(scratch, chart, single);
+    if (fs.cube) {
+        if (fs.perspective) receiver_cube<true>(out, scratch.corners, fs, chart, n, counts);
+        else receiver_cube<false>(out, scratch.corners, fs, chart, n, counts);
+    } else if (chart.is_plane()) {
+        if (fs.perspective) receiver_single_face<true, true>(out, scratch, fs.face[0], chart, n, counts);
+        else receiver_single_face<false, true>(out, scratch, fs.face[0], chart, n, counts);
+    } else {
+        if (fs.perspective) receiver_single_face<true, false>(out, scratch, fs.face[0], chart, n, counts);
+        else receiver_single_face<false, false>(out, scratch, fs.face[0], chart, n, counts);
+    }
 }
 
 void camera_irradiance(Image& out, const PositionsTexture& receivers, const std::vector<Image>& caustic,

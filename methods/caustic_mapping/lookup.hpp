@@ -36,7 +36,9 @@ int auto_bin_samples(const PositionsTexture& receivers, const ReceiverChart& cha
 // Scratch space of the receiver map's pass, refilled on every call (kept only so that nothing allocates
 // after the first frame).
 struct ReceiverScratch {
-    std::vector<glm::dvec3> corners;   // the chart's bin corners
+    std::vector<glm::dvec3> corners;            // the chart's bin corners
+    std::vector<double> corner_px, corner_py;   // single face: their texel coordinates
+    std::vector<std::uint8_t> corner_front;     // single face: in front of the eye
 };
 
 // The receiver map (`out` is resized to the chart): the mean of n x n stratified lookups per bin (n = 1:
