@@ -3,7 +3,8 @@
 // the mask against the same lookups with every bit set (nothing skipped), bit for bit with the same
 // counts: orthographic, perspective and cube-map views of sphere.json's floor with an occluder above it
 // (shadowed lookups), a sparse caustic map and camera points beside the window (outside lookups). The
-// camera rows computed in lanes against the same points looked up one at a time.
+// receiver-map and camera points computed in lanes against the same points looked up one at a time, also
+// on sand.json's height-field receiver.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -116,32 +117,49 @@ CameraGBuffer camera_points(std::mt19937& rng) {
     return gb;
 }
 
+// A cube map whose six faces are copies of the single face of `tex`: whichever face a point picks, it is
+// looked up in that face, one point at a time (the cube-map paths).
+PositionsTexture six_copies(const PositionsTexture& tex) {
+    PositionsTexture six = tex;
+    six.cube = true;
+    six.faces.assign(6, tex.faces[0]);
+    six.maps.assign(6, tex.maps[0]);
+    return six;
+}
+
 bool same_pixels(const Image& a, const Image& b) {
     return a.width == b.width && a.height == b.height &&
            std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size() * sizeof(float)) == 0;
 }
 
 TEST(LookupMask, LookupsEqualLookupsWithoutTheMask) {
-    Scene scene = load_scene("scenes/sphere.json");
-    const FrameGeometry frame = build_frame_geometry(scene, 0);
-    const ReceiverChart chart(frame, 48, 40);
-    const glm::dvec3 eye = scene.lights[0].position;
+    // sphere.json: a plane for receiver; sand.json: a height field (its chart's normals vary).
+    const Scene sphere = load_scene("scenes/sphere.json"), sand = load_scene("scenes/sand.json");
+    const FrameGeometry sphere_frame = build_frame_geometry(sphere, 0), sand_frame = build_frame_geometry(sand, 0);
+    const ReceiverChart sphere_chart(sphere_frame, 48, 40), sand_chart(sand_frame, 40, 48);
+    const glm::dvec3 eye = sphere.lights[0].position;
     const int map = 160;
-    LightProjection persp;
-    ASSERT_TRUE(fit_perspective(eye, frame.receiver().bounds, map, map, persp, 80.0));
+    LightProjection persp, sand_persp;
+    ASSERT_TRUE(fit_perspective(eye, sphere_frame.receiver().bounds, map, map, persp, 80.0));
+    ASSERT_TRUE(fit_perspective(eye, sand_frame.receiver().bounds, map, map, sand_persp, 80.0));
     const std::array<LightProjection, 6> cube = cube_faces(eye, map);
+    const glm::dvec3 tilted = glm::normalize(glm::dvec3(0.2, -0.1, -1));
     struct Case {
         const char* name;
+        const ReceiverChart* chart;
         PositionsTexture tex;
     };
     const Case cases[] = {
-        {"orthographic", floor_texture(frame, {fit_orthographic(glm::normalize(glm::dvec3(0.2, -0.1, -1)), frame.receiver().bounds, map, map)}, false)},
-        {"perspective", floor_texture(frame, {persp}, false)},
-        {"cube", floor_texture(frame, std::vector<LightProjection>(cube.begin(), cube.end()), true)},
+        {"orthographic", &sphere_chart, floor_texture(sphere_frame, {fit_orthographic(tilted, sphere_frame.receiver().bounds, map, map)}, false)},
+        {"perspective", &sphere_chart, floor_texture(sphere_frame, {persp}, false)},
+        {"cube", &sphere_chart, floor_texture(sphere_frame, std::vector<LightProjection>(cube.begin(), cube.end()), true)},
+        {"sand orthographic", &sand_chart, floor_texture(sand_frame, {fit_orthographic(tilted, sand_frame.receiver().bounds, map, map)}, false)},
+        {"sand perspective", &sand_chart, floor_texture(sand_frame, {sand_persp}, false)},
     };
     std::mt19937 rng(11);
     const CameraGBuffer gb = camera_points(rng);
     for (const Case& c : cases) {
+        const ReceiverChart& chart = *c.chart;
         // A sparse caustic map: blobs over the floor, and flux over the occluder.
         std::vector<Image> flux(c.tex.faces.size(), Image(map, map)), ones(c.tex.faces.size(), Image(map, map));
         std::uniform_real_distribution<float> u(0.0f, 1.0f);
@@ -168,6 +186,18 @@ TEST(LookupMask, LookupsEqualLookupsWithoutTheMask) {
             EXPECT_EQ(cw.outside, co.outside) << c.name << " receiver n " << n;
             EXPECT_EQ(cw.shadowed, co.shadowed) << c.name << " receiver n " << n;
             EXPECT_GT(std::count_if(with.pixels.begin(), with.pixels.end(), [](float p) { return p > 0.0f; }), 0) << c.name;
+            if (!c.tex.cube) {   // the single face's lanes against a cube of six copies of it (one point at a time)
+                const PositionsTexture six = six_copies(c.tex);
+                const std::vector<Image> flux6(6, flux[0]);
+                LookupMask mask6;
+                mask6.build(six, flux6);
+                Image one_by_one;
+                LookupCounts c6;
+                receiver_irradiance(one_by_one, scratch, six, flux6, mask6, chart, n, 1.0, c6);
+                EXPECT_TRUE(same_pixels(with, one_by_one)) << c.name << " receiver n " << n << ", lanes against one point at a time";
+                EXPECT_EQ(cw.outside, c6.outside) << c.name;
+                EXPECT_EQ(cw.shadowed, c6.shadowed) << c.name;
+            }
         }
         Image with, without;
         LookupCounts cw, co;
@@ -176,14 +206,11 @@ TEST(LookupMask, LookupsEqualLookupsWithoutTheMask) {
         EXPECT_TRUE(same_pixels(with, without)) << c.name << " camera";
         EXPECT_EQ(cw.outside, co.outside) << c.name << " camera";
         EXPECT_EQ(cw.shadowed, co.shadowed) << c.name << " camera";
-        EXPECT_GT(co.shadowed, 0) << c.name << ": the occluder shadows some lookups with flux";
+        if (c.chart == &sphere_chart) EXPECT_GT(co.shadowed, 0) << c.name << ": the occluder shadows some lookups with flux";
         if (!c.tex.cube) {
             // The single face's rows go through lanes (project_row); a "cube" of six copies of that face
             // takes the one-point-at-a-time path: the same bits and counts.
-            PositionsTexture six = c.tex;
-            six.cube = true;
-            six.faces.assign(6, c.tex.faces[0]);
-            six.maps.assign(6, c.tex.maps[0]);
+            const PositionsTexture six = six_copies(c.tex);
             const std::vector<Image> flux6(6, flux[0]);
             LookupMask mask6;
             mask6.build(six, flux6);
