@@ -57,14 +57,63 @@ Faces hoist(const PositionsTexture& receivers, const std::vector<Image>& caustic
     return fs;
 }
 
+// The dot products of a receiver point's unit normal (world space) with the face's right, up and forward
+// axes, which are all the depth bias and the texel area use of it.
+template <class NormalFn>
+inline auto normal_dots(const Face& f, NormalFn&& normal) {
+    return [&f, &normal] {
+        const glm::dvec3 n = normal();
+        return glm::dvec3(glm::dot(n, f.right), glm::dot(n, f.up), glm::dot(n, f.forward));
+    };
+}
+
+// The lookup's end where the caustic map holds flux (bilinear value `flux` != 0) at a receiver texel
+// (`texel`, id not -1): the depth test, then flux / receiver area of the texel. `dots()` gives
+// normal_dots' three products.
+template <bool kPerspective, class DotsFn>
+inline double irradiance_with_flux(const Face& f, const glm::dvec3& v, double inv_depth, std::size_t texel, float flux,
+                                   DotsFn&& dots, LookupCounts& counts) {
+    const double depth = v.z;
+    // Shadow-map depth test with a slope-scaled bias of about two texels: bias = k (1 + tan(angle of
+    // incidence)), k >= 0 two texels (at this depth, in perspective). The slope term is evaluated only
+    // when the smallest bias (tan = 0) does not already pass the test.
+    const glm::dvec3 nd3 = dots();
+    double nd, k = f.bias_unit, r2 = 0.0;
+    if constexpr (kPerspective) {
+        nd = std::abs(nd3.x * v.x + nd3.y * v.y + nd3.z * v.z);
+        r2 = glm::dot(v, v);
+        k *= depth;
+    } else {
+        nd = std::abs(nd3.z);
+    }
+    const float stored = f.g->depth[texel];
+    if (static_cast<float>(depth - k) > stored) {
+        const double c = std::max(kPerspective ? nd / std::sqrt(r2) : nd, 0.05);
+        if (static_cast<float>(depth - k * (1.0 + std::sqrt(1.0 - c * c) / c)) > stored) {
+            ++counts.shadowed;
+            return 0.0;
+        }
+    }
+    // 1 / receiver area of one texel (LightProjection::surface_texel_area, cosine clamped at 1e-3):
+    // orthographic A / cos; perspective (solid angle A z^3 / r^3) * r^2 / cos = A z^3 / |n . d|.
+    double inv_area;
+    if constexpr (kPerspective) {
+        const double cosine_r = nd * nd >= 1e-6 * r2 ? nd : 1e-3 * std::sqrt(r2);
+        inv_area = cosine_r * f.inv_texel_area * (inv_depth * inv_depth * inv_depth);
+    } else {
+        inv_area = std::max(nd, 1e-3) * f.inv_texel_area;
+    }
+    return static_cast<double>(flux) * static_cast<float>(inv_area);
+}
+
 // Irradiance at a receiver point given by its coordinates v = (x, y, depth) in face f's view space, in
 // front of the eye in perspective (depth > near_depth), and by its texel coordinates (px, py) and 1 / depth
-// (1 when orthographic) from project(); `normal()` gives its unit normal (world space) and is called only
-// where the caustic map holds flux (the depth bias and the texel area need it).
-template <bool kPerspective, class NormalFn>
+// (1 when orthographic) from project(); `dots()` gives the dot products of its unit normal with the face's
+// axes (normal_dots) and is called only where the caustic map holds flux (the depth bias and the texel
+// area need it).
+template <bool kPerspective, class DotsFn>
 inline double irradiance_at_texel(const Face& f, const glm::dvec3& v, double inv_depth, double px, double py,
-                                  NormalFn&& normal, LookupCounts& counts) {
-    const double depth = v.z;
+                                  DotsFn&& dots, LookupCounts& counts) {
     const int W = f.width, H = f.height;
     if (!(px >= 0.0 && py >= 0.0 && px <= W && py <= H)) {
         ++counts.outside;
@@ -88,36 +137,7 @@ inline double irradiance_at_texel(const Face& f, const glm::dvec3& v, double inv
     const float bottom = m[w] + ax * (m[w + 1] - m[w]);
     const float flux = top + ay * (bottom - top);
     if (flux == 0.0f) return 0.0;   // no caustic here: the depth test cannot change that
-    // Shadow-map depth test with a slope-scaled bias of about two texels: bias = k (1 + tan(angle of
-    // incidence)), k >= 0 two texels (at this depth, in perspective). The slope term is evaluated only
-    // when the smallest bias (tan = 0) does not already pass the test.
-    const glm::dvec3 n = normal();
-    double nd, k = f.bias_unit, r2 = 0.0;
-    if constexpr (kPerspective) {
-        nd = std::abs(glm::dot(n, f.right) * v.x + glm::dot(n, f.up) * v.y + glm::dot(n, f.forward) * v.z);
-        r2 = glm::dot(v, v);
-        k *= depth;
-    } else {
-        nd = std::abs(glm::dot(n, f.forward));
-    }
-    const float stored = g.depth[texel];
-    if (static_cast<float>(depth - k) > stored) {
-        const double c = std::max(kPerspective ? nd / std::sqrt(r2) : nd, 0.05);
-        if (static_cast<float>(depth - k * (1.0 + std::sqrt(1.0 - c * c) / c)) > stored) {
-            ++counts.shadowed;
-            return 0.0;
-        }
-    }
-    // 1 / receiver area of one texel (LightProjection::surface_texel_area, cosine clamped at 1e-3):
-    // orthographic A / cos; perspective (solid angle A z^3 / r^3) * r^2 / cos = A z^3 / |n . d|.
-    double inv_area;
-    if constexpr (kPerspective) {
-        const double cosine_r = nd * nd >= 1e-6 * r2 ? nd : 1e-3 * std::sqrt(r2);
-        inv_area = cosine_r * f.inv_texel_area * (inv_depth * inv_depth * inv_depth);
-    } else {
-        inv_area = std::max(nd, 1e-3) * f.inv_texel_area;
-    }
-    return static_cast<double>(flux) * static_cast<float>(inv_area);
+    return irradiance_with_flux<kPerspective>(f, v, inv_depth, texel, flux, dots, counts);
 }
 
 // Texel coordinates (px, py) of view-space point v (perspective: in front of the eye), and 1 / depth.
@@ -145,7 +165,7 @@ inline double irradiance_in_view(const Face& f, const glm::dvec3& v, NormalFn&& 
     }
     double inv_depth, px, py;
     project<kPerspective>(f, v, inv_depth, px, py);
-    return irradiance_at_texel<kPerspective>(f, v, inv_depth, px, py, normal, counts);
+    return irradiance_at_texel<kPerspective>(f, v, inv_depth, px, py, normal_dots(f, normal), counts);
 }
 
 glm::dvec3 to_view(const Face& f, const glm::dvec3& p) {
@@ -306,6 +326,7 @@ void receiver_single_face(Image& out, const ReceiverScratch& scratch, const Face
     const int W = chart.width(), H = chart.height();
     const double inv_n = 1.0 / n, per_bin = static_cast<double>(n) * n, inv_w = 1.0 / W;
     const glm::dvec3 plane_normal = kPlane ? chart.normal(0.5, 0.5) : glm::dvec3(0.0);
+    const glm::dvec3 plane_dots = normal_dots(f, [&] { return plane_normal; })();
     const std::vector<glm::dvec3>& corners = scratch.corners;
     tbb::combinable<LookupCounts> local;
     tbb::parallel_for(tbb::blocked_range<int>(0, H, 4), [&](const tbb::blocked_range<int>& rows) {
@@ -336,11 +357,12 @@ void receiver_single_face(Image& out, const ReceiverScratch& scratch, const Face
                             sum += 0.0;
                             continue;
                         }
-                        auto normal = [&] {
-                            if constexpr (kPlane) return plane_normal;
-                            else return chart.normal((x + (a + 0.5) * inv_n) * inv_w, t);
+                        auto normal = [&] { return chart.normal((x + (a + 0.5) * inv_n) * inv_w, t); };
+                        auto dots = [&] {
+                            if constexpr (kPlane) return plane_dots;
+                            else return normal_dots(f, normal)();
                         };
-                        sum += irradiance_at_texel<kPerspective>(f, q, lanes.inv_depth[i], lanes.px[i], lanes.py[i], normal, c);
+                        sum += irradiance_at_texel<kPerspective>(f, q, lanes.inv_depth[i], lanes.px[i], lanes.py[i], dots, c);
                     }
                 }
                 out.at(x, y) = static_cast<float>(sum / per_bin);
@@ -398,18 +420,16 @@ void camera_pass(Image& out, const Faces& fs, const CameraGBuffer& gb, LookupCou
             for (int y = rows.begin(); y != rows.end(); ++y) {
                 project_row(f, kPerspective, &gb.position[gb.index(0, y)], gb.width, lanes);
                 for (int x = 0; x < gb.width; ++x) {
-                    const std::size_t i = gb.index(x, y);
+                    const std::size_t i = gb.index(x, y), k = static_cast<std::size_t>(x);
                     if (!gb.covered[i]) continue;
-                    const glm::dvec3 v(lanes.vx[static_cast<std::size_t>(x)], lanes.vy[static_cast<std::size_t>(x)],
-                                       lanes.vz[static_cast<std::size_t>(x)]);
+                    const glm::dvec3 v(lanes.vx[k], lanes.vy[k], lanes.vz[k]);
                     if (kPerspective && !(v.z > f.near_depth)) {
                         ++c.outside;
                         continue;   // 0
                     }
                     auto normal = [&] { return glm::dvec3(gb.normal[i]); };
                     out.at(x, y) = static_cast<float>(irradiance_at_texel<kPerspective>(
-                        f, v, lanes.inv_depth[static_cast<std::size_t>(x)], lanes.px[static_cast<std::size_t>(x)],
-                        lanes.py[static_cast<std::size_t>(x)], normal, c));
+                        f, v, lanes.inv_depth[k], lanes.px[k], lanes.py[k], normal_dots(f, normal), c));
                 }
             }
             return;
