@@ -63,7 +63,9 @@ TEST(LookupMask, BitsMatchTheirDefinition) {
                     ASSERT_EQ(bit, expected_bit(tex.maps[f], flux[f], x, y)) << "size " << size << " face " << f << " texel " << x << ", " << y;
                     (bit ? set : clear)++;
                 }
-        if (size >= 63) EXPECT_GT(clear, 0) << size;
+        if (size >= 63) {
+            EXPECT_GT(clear, 0) << size;
+        }
         EXPECT_GT(set, 0) << size;
         // Box queries against a scan of the bits.
         std::uniform_int_distribution<int> at(0, size - 1);
@@ -206,7 +208,9 @@ TEST(LookupMask, LookupsEqualLookupsWithoutTheMask) {
         EXPECT_TRUE(same_pixels(with, without)) << c.name << " camera";
         EXPECT_EQ(cw.outside, co.outside) << c.name << " camera";
         EXPECT_EQ(cw.shadowed, co.shadowed) << c.name << " camera";
-        if (c.chart == &sphere_chart) EXPECT_GT(co.shadowed, 0) << c.name << ": the occluder shadows some lookups with flux";
+        if (c.chart == &sphere_chart) {
+            EXPECT_GT(co.shadowed, 0) << c.name << ": the occluder shadows some lookups with flux";
+        }
         if (!c.tex.cube) {
             // The single face's rows go through lanes (project_row); a "cube" of six copies of that face
             // takes the one-point-at-a-time path: the same bits and counts.
