@@ -192,70 +192,62 @@ struct RowLanes {
     }
 };
 
-CAUSTICS_AVX2_CLONES
-void project_row(const Face& f, bool perspective, const glm::vec3* p, int n, RowLanes& r) {
+// Where the lanes write (a RowLanes' arrays) with the face's projection constants: put() stores point
+// i's view-space coordinates, 1 / depth and texel coordinates by project()'s operations.
+struct LaneWriter {
+    double *vx, *vy, *vz, *inv, *px, *py;
+    double x0, y1, sx, sy;
+    LaneWriter(const Face& f, RowLanes& r)
+        : vx(r.vx.data()), vy(r.vy.data()), vz(r.vz.data()), inv(r.inv_depth.data()), px(r.px.data()),
+          py(r.py.data()), x0(f.x0), y1(f.y1), sx(f.sx), sy(f.sy) {}
+    template <bool kPerspective>
+    void put(int i, double x, double y, double z) const {
+        vx[i] = x, vy[i] = y, vz[i] = z;
+        if constexpr (kPerspective) {
+            const double id = 1.0 / z;
+            inv[i] = id, px[i] = (x * id - x0) * sx, py[i] = (y1 - y * id) * sy;
+        } else {
+            inv[i] = 1.0, px[i] = (x - x0) * sx, py[i] = (y1 - y) * sy;
+        }
+    }
+};
+
+// The camera's row of n points (floats, world space) in view space: to_view()'s operations.
+template <bool kPerspective>
+inline void project_points(const Face& f, const glm::vec3* p, int n, const LaneWriter& w) {
     const double ex = f.eye.x, ey = f.eye.y, ez = f.eye.z;
     const double rx = f.right.x, ry = f.right.y, rz = f.right.z, ux = f.up.x, uy = f.up.y, uz = f.up.z;
     const double fx = f.forward.x, fy = f.forward.y, fz = f.forward.z;
-    const double x0 = f.x0, y1 = f.y1, sx = f.sx, sy = f.sy;
-    double* __restrict vx = r.vx.data();
-    double* __restrict vy = r.vy.data();
-    double* __restrict vz = r.vz.data();
-    double* __restrict inv = r.inv_depth.data();
-    double* __restrict px = r.px.data();
-    double* __restrict py = r.py.data();
-    const float* __restrict q = &p[0].x;
-    if (perspective) {
+    const float* q = &p[0].x;
 #pragma omp simd
-        for (int i = 0; i < n; ++i) {
-            const double dx = static_cast<double>(q[3 * i]) - ex, dy = static_cast<double>(q[3 * i + 1]) - ey,
-                         dz = static_cast<double>(q[3 * i + 2]) - ez;
-            const double x = dx * rx + dy * ry + dz * rz, y = dx * ux + dy * uy + dz * uz, z = dx * fx + dy * fy + dz * fz;
-            const double id = 1.0 / z;
-            vx[i] = x, vy[i] = y, vz[i] = z, inv[i] = id;
-            px[i] = (x * id - x0) * sx, py[i] = (y1 - y * id) * sy;
-        }
-    } else {
-#pragma omp simd
-        for (int i = 0; i < n; ++i) {
-            const double dx = static_cast<double>(q[3 * i]) - ex, dy = static_cast<double>(q[3 * i + 1]) - ey,
-                         dz = static_cast<double>(q[3 * i + 2]) - ez;
-            const double x = dx * rx + dy * ry + dz * rz, y = dx * ux + dy * uy + dz * uz, z = dx * fx + dy * fy + dz * fz;
-            vx[i] = x, vy[i] = y, vz[i] = z, inv[i] = 1.0;
-            px[i] = (x - x0) * sx, py[i] = (y1 - y) * sy;
-        }
+    for (int i = 0; i < n; ++i) {
+        const double dx = static_cast<double>(q[3 * i]) - ex, dy = static_cast<double>(q[3 * i + 1]) - ey,
+                     dz = static_cast<double>(q[3 * i + 2]) - ez;
+        w.put<kPerspective>(i, dx * rx + dy * ry + dz * rz, dx * ux + dy * uy + dz * uz, dx * fx + dy * fy + dz * fz);
     }
 }
 
+CAUSTICS_AVX2_CLONES
+void project_row(const Face& f, bool perspective, const glm::vec3* p, int n, RowLanes& r) {
+    if (perspective) project_points<true>(f, p, n, LaneWriter(f, r));
+    else project_points<false>(f, p, n, LaneWriter(f, r));
+}
+
 // The receiver map's n points q_a = left + (a + 1/2) step (a < n) of one row of a bin, as project_row.
+template <bool kPerspective>
+inline void project_steps(const glm::dvec3& left, const glm::dvec3& step, int n, const LaneWriter& w) {
+#pragma omp simd
+    for (int a = 0; a < n; ++a) {
+        const double s = a + 0.5;
+        w.put<kPerspective>(a, left.x + s * step.x, left.y + s * step.y, left.z + s * step.z);
+    }
+}
+
 CAUSTICS_AVX2_CLONES
 void project_samples(const Face& f, bool perspective, const glm::dvec3& left, const glm::dvec3& step, int n,
                      RowLanes& r) {
-    const double x0 = f.x0, y1 = f.y1, sx = f.sx, sy = f.sy;
-    double* __restrict vx = r.vx.data();
-    double* __restrict vy = r.vy.data();
-    double* __restrict vz = r.vz.data();
-    double* __restrict inv = r.inv_depth.data();
-    double* __restrict px = r.px.data();
-    double* __restrict py = r.py.data();
-    if (perspective) {
-#pragma omp simd
-        for (int a = 0; a < n; ++a) {
-            const double s = a + 0.5;
-            const double x = left.x + s * step.x, y = left.y + s * step.y, z = left.z + s * step.z;
-            const double id = 1.0 / z;
-            vx[a] = x, vy[a] = y, vz[a] = z, inv[a] = id;
-            px[a] = (x * id - x0) * sx, py[a] = (y1 - y * id) * sy;
-        }
-    } else {
-#pragma omp simd
-        for (int a = 0; a < n; ++a) {
-            const double s = a + 0.5;
-            const double x = left.x + s * step.x, y = left.y + s * step.y, z = left.z + s * step.z;
-            vx[a] = x, vy[a] = y, vz[a] = z, inv[a] = 1.0;
-            px[a] = (x - x0) * sx, py[a] = (y1 - y) * sy;
-        }
-    }
+    if (perspective) project_steps<true>(left, step, n, LaneWriter(f, r));
+    else project_steps<false>(left, step, n, LaneWriter(f, r));
 }
 
 // The chart's bin corners, (W + 1) x (H + 1), row-major: in the view space of the single face (the view
