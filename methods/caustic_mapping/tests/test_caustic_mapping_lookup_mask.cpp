@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cstring>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "../lookup.hpp"
@@ -134,6 +135,25 @@ bool same_pixels(const Image& a, const Image& b) {
            std::memcmp(a.pixels.data(), b.pixels.data(), a.pixels.size() * sizeof(float)) == 0;
 }
 
+// One pass's image and counts.
+struct Looked {
+    Image image;
+    LookupCounts counts;
+};
+
+template <class Pass>
+Looked looked(Pass&& pass) {
+    Looked l;
+    pass(l.image, l.counts);
+    return l;
+}
+
+void expect_same(const Looked& a, const Looked& b, const std::string& what) {
+    EXPECT_TRUE(same_pixels(a.image, b.image)) << what;
+    EXPECT_EQ(a.counts.outside, b.counts.outside) << what;
+    EXPECT_EQ(a.counts.shadowed, b.counts.shadowed) << what;
+}
+
 TEST(LookupMask, LookupsEqualLookupsWithoutTheMask) {
     // sphere.json: a plane for receiver; sand.json: a height field (its chart's normals vary).
     const Scene sphere = load_scene("scenes/sphere.json"), sand = load_scene("scenes/sand.json");
@@ -178,54 +198,33 @@ TEST(LookupMask, LookupsEqualLookupsWithoutTheMask) {
         LookupMask mask, every;
         mask.build(c.tex, flux);
         every.build(c.tex, ones);   // every bit set: no lookup is skipped
+        // The single face's points go through lanes (project_row, project_samples); a "cube" of six
+        // copies of that face takes the one-point-at-a-time path.
+        const PositionsTexture six = c.tex.cube ? PositionsTexture{} : six_copies(c.tex);
+        const std::vector<Image> flux6(6, flux[0]);
+        LookupMask mask6;
+        if (!c.tex.cube) mask6.build(six, flux6);
         for (int n : {1, 3}) {
-            Image with, without;
+            const std::string what = std::string(c.name) + " receiver n " + std::to_string(n);
             ReceiverScratch scratch;
-            LookupCounts cw, co;
-            receiver_irradiance(with, scratch, c.tex, flux, mask, chart, n, 1.0, cw);
-            receiver_irradiance(without, scratch, c.tex, flux, every, chart, n, 1.0, co);
-            EXPECT_TRUE(same_pixels(with, without)) << c.name << " receiver n " << n;
-            EXPECT_EQ(cw.outside, co.outside) << c.name << " receiver n " << n;
-            EXPECT_EQ(cw.shadowed, co.shadowed) << c.name << " receiver n " << n;
-            EXPECT_GT(std::count_if(with.pixels.begin(), with.pixels.end(), [](float p) { return p > 0.0f; }), 0) << c.name;
-            if (!c.tex.cube) {   // the single face's lanes against a cube of six copies of it (one point at a time)
-                const PositionsTexture six = six_copies(c.tex);
-                const std::vector<Image> flux6(6, flux[0]);
-                LookupMask mask6;
-                mask6.build(six, flux6);
-                Image one_by_one;
-                LookupCounts c6;
-                receiver_irradiance(one_by_one, scratch, six, flux6, mask6, chart, n, 1.0, c6);
-                EXPECT_TRUE(same_pixels(with, one_by_one)) << c.name << " receiver n " << n << ", lanes against one point at a time";
-                EXPECT_EQ(cw.outside, c6.outside) << c.name;
-                EXPECT_EQ(cw.shadowed, c6.shadowed) << c.name;
-            }
+            const Looked with = looked([&](Image& out, LookupCounts& k) { receiver_irradiance(out, scratch, c.tex, flux, mask, chart, n, 1.0, k); });
+            expect_same(with, looked([&](Image& out, LookupCounts& k) { receiver_irradiance(out, scratch, c.tex, flux, every, chart, n, 1.0, k); }), what);
+            if (!c.tex.cube)
+                expect_same(with, looked([&](Image& out, LookupCounts& k) { receiver_irradiance(out, scratch, six, flux6, mask6, chart, n, 1.0, k); }),
+                            what + ", lanes against one point at a time");
+            EXPECT_GT(std::count_if(with.image.pixels.begin(), with.image.pixels.end(), [](float p) { return p > 0.0f; }), 0) << what;
         }
-        Image with, without;
-        LookupCounts cw, co;
-        camera_irradiance(with, c.tex, flux, mask, gb, 1.0, cw);
-        camera_irradiance(without, c.tex, flux, every, gb, 1.0, co);
-        EXPECT_TRUE(same_pixels(with, without)) << c.name << " camera";
-        EXPECT_EQ(cw.outside, co.outside) << c.name << " camera";
-        EXPECT_EQ(cw.shadowed, co.shadowed) << c.name << " camera";
+        const std::string what = std::string(c.name) + " camera";
+        const Looked with = looked([&](Image& out, LookupCounts& k) { camera_irradiance(out, c.tex, flux, mask, gb, 1.0, k); });
+        const Looked without = looked([&](Image& out, LookupCounts& k) { camera_irradiance(out, c.tex, flux, every, gb, 1.0, k); });
+        expect_same(with, without, what);
+        if (!c.tex.cube)
+            expect_same(with, looked([&](Image& out, LookupCounts& k) { camera_irradiance(out, six, flux6, mask6, gb, 1.0, k); }),
+                        what + ", lanes against one point at a time");
         if (c.chart == &sphere_chart) {
-            EXPECT_GT(co.shadowed, 0) << c.name << ": the occluder shadows some lookups with flux";
+            EXPECT_GT(without.counts.shadowed, 0) << c.name << ": the occluder shadows some lookups with flux";
         }
-        if (!c.tex.cube) {
-            // The single face's rows go through lanes (project_row); a "cube" of six copies of that face
-            // takes the one-point-at-a-time path: the same bits and counts.
-            const PositionsTexture six = six_copies(c.tex);
-            const std::vector<Image> flux6(6, flux[0]);
-            LookupMask mask6;
-            mask6.build(six, flux6);
-            Image one_by_one;
-            LookupCounts c6;
-            camera_irradiance(one_by_one, six, flux6, mask6, gb, 1.0, c6);
-            EXPECT_TRUE(same_pixels(with, one_by_one)) << c.name << " camera, lanes against one point at a time";
-            EXPECT_EQ(cw.outside, c6.outside) << c.name;
-            EXPECT_EQ(cw.shadowed, c6.shadowed) << c.name;
-        }
-        EXPECT_GT(std::count_if(with.pixels.begin(), with.pixels.end(), [](float p) { return p > 0.0f; }), 0) << c.name;
+        EXPECT_GT(std::count_if(with.image.pixels.begin(), with.image.pixels.end(), [](float p) { return p > 0.0f; }), 0) << what;
     }
 }
 
