@@ -308,6 +308,32 @@ bool bin_without_caustic(const Face& f, const ReceiverScratch& scratch, const st
                             static_cast<int>(yh));
 }
 
+// Bin x's points at height v in the bin (a row of n points, left + (a + 1/2) step): by bilinear
+// interpolation of its four corners (lo: the chart row's lower corners, hi: its upper ones). Exact for a
+// plane (the chart is affine there), a small-footprint approximation of a height field's surface within
+// one bin. The perspective divide is done per point, so a perspective view of a plane stays exact.
+// Normals come from the chart itself, where they are needed.
+inline void bin_row(const glm::dvec3* lo, const glm::dvec3* hi, int x, double v, double inv_n, glm::dvec3& left,
+                    glm::dvec3& step) {
+    left = lo[x] + v * (hi[x] - lo[x]);
+    step = (lo[x + 1] + v * (hi[x + 1] - lo[x + 1]) - left) * inv_n;
+}
+
+// The mean over bin (x, y)'s n x n points (H rows of bins): `row(left, step, t, sum)` adds the lookups of
+// one row of points (chart coordinate t) to `sum`, in order.
+template <class RowFn>
+inline float bin_mean(const glm::dvec3* lo, const glm::dvec3* hi, int x, int y, int n, int H, RowFn&& row) {
+    const double inv_n = 1.0 / n;
+    double sum = 0.0;
+    for (int b = 0; b < n; ++b) {
+        const double v = (b + 0.5) * inv_n;
+        glm::dvec3 left, step;
+        bin_row(lo, hi, x, v, inv_n, left, step);
+        row(left, step, (y + v) / H, sum);
+    }
+    return static_cast<float>(sum / (static_cast<double>(n) * n));
+}
+
 // The receiver map of a single face: bins whose footprint's mask bits are all clear are skipped (left at
 // 0), and each row of a bin's n x n points is projected in lanes (project_samples) before the scalar
 // lookups. With a plane for receiver (kPlane) the normal is the chart's one normal, so the lookups' dot
@@ -316,7 +342,7 @@ template <bool kPerspective, bool kPlane>
 void receiver_single_face(Image& out, const ReceiverScratch& scratch, const Face& f, const ReceiverChart& chart, int n,
                           LookupCounts& counts) {
     const int W = chart.width(), H = chart.height();
-    const double inv_n = 1.0 / n, per_bin = static_cast<double>(n) * n, inv_w = 1.0 / W;
+    const double inv_n = 1.0 / n, inv_w = 1.0 / W;
     const glm::dvec3 plane_normal = kPlane ? chart.normal(0.5, 0.5) : glm::dvec3(0.0);
     const glm::dvec3 plane_dots = normal_dots(f, [&] { return plane_normal; })();
     const std::vector<glm::dvec3>& corners = scratch.corners;
@@ -333,13 +359,7 @@ void receiver_single_face(Image& out, const ReceiverScratch& scratch, const Face
                 const std::size_t k = row + static_cast<std::size_t>(x);
                 const std::size_t bin[4] = {k, k + 1, k + static_cast<std::size_t>(W + 1), k + static_cast<std::size_t>(W + 2)};
                 if (bin_without_caustic(f, scratch, bin)) continue;   // 0 already
-                // The bin's points by bilinear interpolation of its four corners (receiver_pass).
-                double sum = 0.0;
-                for (int b = 0; b < n; ++b) {
-                    const double v = (b + 0.5) * inv_n;
-                    const glm::dvec3 left = lo[x] + v * (hi[x] - lo[x]);
-                    const glm::dvec3 step = (lo[x + 1] + v * (hi[x + 1] - lo[x + 1]) - left) * inv_n;
-                    const double t = (y + v) / H;
+                out.at(x, y) = bin_mean(lo, hi, x, y, n, H, [&](const glm::dvec3& left, const glm::dvec3& step, double t, double& sum) {
                     project_samples(f, kPerspective, left, step, n, lanes);
                     for (int a = 0; a < n; ++a) {
                         const std::size_t i = static_cast<std::size_t>(a);
@@ -356,8 +376,7 @@ void receiver_single_face(Image& out, const ReceiverScratch& scratch, const Face
                         };
                         sum += irradiance_at_texel<kPerspective>(f, q, lanes.inv_depth[i], lanes.px[i], lanes.py[i], dots, c);
                     }
-                }
-                out.at(x, y) = static_cast<float>(sum / per_bin);
+                });
             }
         }
     });
@@ -369,32 +388,21 @@ template <bool kPerspective>
 void receiver_cube(Image& out, const std::vector<glm::dvec3>& corners, const Faces& fs, const ReceiverChart& chart,
                    int n, LookupCounts& counts) {
     const int W = chart.width(), H = chart.height();
-    const double inv_n = 1.0 / n, per_bin = static_cast<double>(n) * n, inv_w = 1.0 / W;
+    const double inv_n = 1.0 / n, inv_w = 1.0 / W;
     tbb::combinable<LookupCounts> local;
     tbb::parallel_for(tbb::blocked_range<int>(0, H, 4), [&](const tbb::blocked_range<int>& rows) {
         LookupCounts& c = local.local();
         for (int y = rows.begin(); y != rows.end(); ++y) {
             const glm::dvec3* lo = &corners[static_cast<std::size_t>(y) * (W + 1)];
             const glm::dvec3* hi = lo + (W + 1);
-            for (int x = 0; x < W; ++x) {
-                // The bin's points by bilinear interpolation of its four corners: exact for a plane (the
-                // chart is affine there), a small-footprint approximation of a height field's surface
-                // within one bin. The perspective divide is done per point, so a perspective view of a
-                // plane stays exact. Normals come from the chart itself, where they are needed.
-                double sum = 0.0;
-                for (int b = 0; b < n; ++b) {
-                    const double v = (b + 0.5) * inv_n;
-                    const glm::dvec3 left = lo[x] + v * (hi[x] - lo[x]);
-                    const glm::dvec3 step = (lo[x + 1] + v * (hi[x + 1] - lo[x + 1]) - left) * inv_n;
-                    const double t = (y + v) / H;
+            for (int x = 0; x < W; ++x)
+                out.at(x, y) = bin_mean(lo, hi, x, y, n, H, [&](const glm::dvec3& left, const glm::dvec3& step, double t, double& sum) {
                     for (int a = 0; a < n; ++a) {
                         const glm::dvec3 q = left + (a + 0.5) * step;   // world space
                         auto normal = [&] { return chart.normal((x + (a + 0.5) * inv_n) * inv_w, t); };
                         sum += irradiance_at<kPerspective>(fs, q, normal, c);
                     }
-                }
-                out.at(x, y) = static_cast<float>(sum / per_bin);
-            }
+                });
         }
     });
     local.combine_each([&](const LookupCounts& c) { counts.outside += c.outside, counts.shadowed += c.shadowed; });
