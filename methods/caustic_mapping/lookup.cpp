@@ -9,18 +9,16 @@
 #include <tbb/combinable.h>
 #include <tbb/parallel_for.h>
 
-#include "simd.hpp"
+#include "lookup_lanes.hpp"
 
 namespace caustics::caustic_mapping {
 namespace {
 
 // One light-view face with its per-point constants hoisted: the projection as multiplications, the
 // texel side for the depth bias, and the face's G-buffer and caustic map.
-struct Face {
+struct Face : ViewProjection {
     const GBuffer* g = nullptr;
     const float* map = nullptr;
-    glm::dvec3 eye{0.0}, right{1, 0, 0}, up{0, 1, 0}, forward{0, 0, -1};
-    double x0 = 0, y1 = 0, sx = 1, sy = 1;   // px = (x - x0) sx, py = (y1 - y) sy
     double near_depth = 0;
     double bias_unit = 0;       // depth_bias * two texel sides (perspective: at unit depth)
     double inv_texel_area = 0;  // 1 / LightProjection::texel_area()
@@ -180,81 +178,12 @@ inline double irradiance_at(const Faces& fs, const glm::dvec3& p, NormalFn&& nor
     return irradiance_in_view<kPerspective>(f, to_view(f, p), normal, counts);
 }
 
-// One row of points (camera G-buffer positions) in the single face: view-space coordinates, 1 / depth and
-// texel coordinates, by the operations of to_view() and project() in the same order (the method is
-// compiled without FMA contraction), so with the same bits, but four or eight points at a time (the
-// divisions dominate a scalar lookup's front half). Points behind the near plane get values that the
-// caller does not use.
-struct RowLanes {
-    std::vector<double> vx, vy, vz, inv_depth, px, py;
-    void resize(std::size_t n) {
-        for (std::vector<double>* v : {&vx, &vy, &vz, &inv_depth, &px, &py}) v->resize(n);
-    }
-};
-
-// Where the lanes write (a RowLanes' arrays) with the face's projection constants: put() stores point
-// i's view-space coordinates, 1 / depth and texel coordinates by project()'s operations.
-struct LaneWriter {
-    double *vx, *vy, *vz, *inv, *px, *py;
-    double x0, y1, sx, sy;
-    LaneWriter(const Face& f, RowLanes& r)
-        : vx(r.vx.data()), vy(r.vy.data()), vz(r.vz.data()), inv(r.inv_depth.data()), px(r.px.data()),
-          py(r.py.data()), x0(f.x0), y1(f.y1), sx(f.sx), sy(f.sy) {}
-    template <bool kPerspective>
-    void put(int i, double x, double y, double z) const {
-        vx[i] = x, vy[i] = y, vz[i] = z;
-        if constexpr (kPerspective) {
-            const double id = 1.0 / z;
-            inv[i] = id, px[i] = (x * id - x0) * sx, py[i] = (y1 - y * id) * sy;
-        } else {
-            inv[i] = 1.0, px[i] = (x - x0) * sx, py[i] = (y1 - y) * sy;
-        }
-    }
-};
-
-// The camera's row of n points (floats, world space) in view space: to_view()'s operations.
-template <bool kPerspective>
-inline void project_points(const Face& f, const glm::vec3* p, int n, const LaneWriter& w) {
-    const double ex = f.eye.x, ey = f.eye.y, ez = f.eye.z;
-    const double rx = f.right.x, ry = f.right.y, rz = f.right.z, ux = f.up.x, uy = f.up.y, uz = f.up.z;
-    const double fx = f.forward.x, fy = f.forward.y, fz = f.forward.z;
-    const float* q = &p[0].x;
-#pragma omp simd
-    for (int i = 0; i < n; ++i) {
-        const double dx = static_cast<double>(q[3 * i]) - ex, dy = static_cast<double>(q[3 * i + 1]) - ey,
-                     dz = static_cast<double>(q[3 * i + 2]) - ez;
-        w.put<kPerspective>(i, dx * rx + dy * ry + dz * rz, dx * ux + dy * uy + dz * uz, dx * fx + dy * fy + dz * fz);
-    }
-}
-
-CAUSTICS_AVX2_CLONES
-void project_row(const Face& f, bool perspective, const glm::vec3* p, int n, RowLanes& r) {
-    if (perspective) project_points<true>(f, p, n, LaneWriter(f, r));
-    else project_points<false>(f, p, n, LaneWriter(f, r));
-}
-
-// The receiver map's n points q_a = left + (a + 1/2) step (a < n) of one row of a bin, as project_row.
-template <bool kPerspective>
-inline void project_steps(const glm::dvec3& left, const glm::dvec3& step, int n, const LaneWriter& w) {
-#pragma omp simd
-    for (int a = 0; a < n; ++a) {
-        const double s = a + 0.5;
-        w.put<kPerspective>(a, left.x + s * step.x, left.y + s * step.y, left.z + s * step.z);
-    }
-}
-
-CAUSTICS_AVX2_CLONES
-void project_samples(const Face& f, bool perspective, const glm::dvec3& left, const glm::dvec3& step, int n,
-                     RowLanes& r) {
-    if (perspective) project_steps<true>(left, step, n, LaneWriter(f, r));
-    else project_steps<false>(left, step, n, LaneWriter(f, r));
-}
-
 // The chart's bin corners, (W + 1) x (H + 1), row-major: in the view space of the single face (the view
 // transform is affine, so interpolating there is interpolating in the world), or world points for a cube
 // map (`view` null), whose samples pick their face one by one.
 // With a single face, also each corner's texel coordinates for the bin test (bin_without_caustic), once
-// per corner instead of once per bin that shares it; `front`: in front of the eye (perspective).
+// per corner instead of once per bin that shares it, and whether the bin test may use them (in front of
+// the eye in perspective, finite).
 template <bool kPerspective>
 void fill_corners(ReceiverScratch& scratch, const ReceiverChart& chart, const Face* view) {
     const int W = chart.width(), H = chart.height();
@@ -263,7 +192,7 @@ void fill_corners(ReceiverScratch& scratch, const ReceiverChart& chart, const Fa
     if (view) {
         scratch.corner_px.resize(count);
         scratch.corner_py.resize(count);
-        scratch.corner_front.resize(count);
+        scratch.corner_usable.resize(count);
     }
     tbb::parallel_for(tbb::blocked_range<int>(0, H + 1, 8), [&](const tbb::blocked_range<int>& rows) {
         for (int j = rows.begin(); j != rows.end(); ++j)
@@ -284,21 +213,23 @@ void fill_corners(ReceiverScratch& scratch, const ReceiverChart& chart, const Fa
                     x /= c.z;
                     y /= c.z;
                 }
-                scratch.corner_front[k] = front;
-                scratch.corner_px[k] = (x - f.x0) * f.sx, scratch.corner_py[k] = (f.y1 - y) * f.sy;
+                const double px = (x - f.x0) * f.sx, py = (f.y1 - y) * f.sy;
+                scratch.corner_px[k] = px, scratch.corner_py[k] = py;
+                scratch.corner_usable[k] = front && std::isfinite(px) && std::isfinite(py);
             }
     });
 }
 
-// True when bin (corners c[0..3], indices into the scratch's corners) certainly gets no caustic: all its points lie in
-// the view (perspective: in front of the eye) and no texel of its footprint has its mask bit set. The
+// True when bin (corners c[0..3], indices into the scratch's corners) certainly gets no caustic: all its
+// points lie in the view (perspective: in front of the eye; finite texel coordinates) and no texel of its
+// footprint has its mask bit set. The
 // points of the bin are convex combinations of its corners (in homogeneous coordinates, in perspective),
 // so they project inside the corners' bounding box; the mask's one texel of dilation covers the bilinear
 // reads. A bin that passes is left at 0: each of its lookups would return 0 and count nothing.
 bool bin_without_caustic(const Face& f, const ReceiverScratch& scratch, const std::size_t c[4]) {
     double xl = 1e300, xh = -1e300, yl = 1e300, yh = -1e300;
     for (int k = 0; k < 4; ++k) {
-        if (!scratch.corner_front[c[k]]) return false;
+        if (!scratch.corner_usable[c[k]]) return false;
         const double px = scratch.corner_px[c[k]], py = scratch.corner_py[c[k]];
         xl = std::min(xl, px), xh = std::max(xh, px), yl = std::min(yl, py), yh = std::max(yh, py);
     }
@@ -344,7 +275,7 @@ void receiver_single_face(Image& out, const ReceiverScratch& scratch, const Face
     const int W = chart.width(), H = chart.height();
     const double inv_n = 1.0 / n, inv_w = 1.0 / W;
     const glm::dvec3 plane_normal = kPlane ? chart.normal(0.5, 0.5) : glm::dvec3(0.0);
-    const glm::dvec3 plane_dots = normal_dots(f, [&] { return plane_normal; })();
+    const glm::dvec3 plane_dots = kPlane ? normal_dots(f, [&] { return plane_normal; })() : glm::dvec3(0.0);
     const std::vector<glm::dvec3>& corners = scratch.corners;
     tbb::combinable<LookupCounts> local;
     tbb::parallel_for(tbb::blocked_range<int>(0, H, 4), [&](const tbb::blocked_range<int>& rows) {
@@ -366,7 +297,7 @@ void receiver_single_face(Image& out, const ReceiverScratch& scratch, const Face
                         const glm::dvec3 q(lanes.vx[i], lanes.vy[i], lanes.vz[i]);
                         if (kPerspective && !(q.z > f.near_depth)) {
                             ++c.outside;
-                            sum += 0.0;
+                            sum += 0.0;   // as the scalar pass adds the 0 it returns
                             continue;
                         }
                         auto normal = [&] { return chart.normal((x + (a + 0.5) * inv_n) * inv_w, t); };
@@ -418,7 +349,7 @@ void camera_pass(Image& out, const Faces& fs, const CameraGBuffer& gb, LookupCou
             RowLanes lanes;
             lanes.resize(static_cast<std::size_t>(gb.width));
             for (int y = rows.begin(); y != rows.end(); ++y) {
-                project_row(f, kPerspective, &gb.position[gb.index(0, y)], gb.width, lanes);
+                project_row(f, kPerspective, gb.position.data() + gb.index(0, y), gb.width, lanes);
                 for (int x = 0; x < gb.width; ++x) {
                     const std::size_t i = gb.index(x, y), k = static_cast<std::size_t>(x);
                     if (!gb.covered[i]) continue;

@@ -33,12 +33,12 @@ struct LookupCounts {
 // lookups see every texel of the bin; at most 16.
 int auto_bin_samples(const PositionsTexture& receivers, const ReceiverChart& chart);
 
-// Scratch space of the receiver map's pass, refilled on every call (kept only so that nothing allocates
-// after the first frame).
+// Scratch space of the receiver map's pass, refilled on every call (kept so that its large buffers are
+// not allocated again in every frame; each task's row buffers of a few KB are).
 struct ReceiverScratch {
     std::vector<glm::dvec3> corners;            // the chart's bin corners
     std::vector<double> corner_px, corner_py;   // single face: their texel coordinates
-    std::vector<std::uint8_t> corner_front;     // single face: in front of the eye
+    std::vector<std::uint8_t> corner_usable;    // single face: in front of the eye, finite
 };
 
 // The receiver map (`out` is resized to the chart): the mean of n x n stratified lookups per bin (n = 1:
