@@ -11,6 +11,7 @@
 #include <cstring>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "../lookup.hpp"
@@ -33,45 +34,47 @@ bool expected_bit(const GBuffer& g, const Image& flux, int x, int y) {
 }
 
 // Random ids (about 5 % empty, in runs) and a sparse caustic map (blobs, a NaN, a denormal).
-void random_face(GBuffer& g, Image& flux, int size, std::mt19937& rng) {
-    g.clear(size, size);
-    flux = Image(size, size);
+void random_face(GBuffer& g, Image& flux, int width, int height, std::mt19937& rng) {
+    g.clear(width, height);
+    flux = Image(width, height);
     std::uniform_real_distribution<float> u(0.0f, 1.0f);
     for (std::size_t i = 0; i < g.id.size(); ++i) g.id[i] = u(rng) < 0.01f ? -1 : (i > 0 && g.id[i - 1] == -1 && u(rng) < 0.7f ? -1 : 0);
     for (int b = 0; b < 6; ++b) {
-        const int cx = static_cast<int>(u(rng) * size), cy = static_cast<int>(u(rng) * size), r = 1 + b % 3;
-        for (int y = std::max(0, cy - r); y < std::min(size, cy + r); ++y)
-            for (int x = std::max(0, cx - r); x < std::min(size, cx + r); ++x) flux.at(x, y) = u(rng);
+        const int cx = static_cast<int>(u(rng) * width), cy = static_cast<int>(u(rng) * height), r = 1 + b % 3;
+        for (int y = std::max(0, cy - r); y < std::min(height, cy + r); ++y)
+            for (int x = std::max(0, cx - r); x < std::min(width, cx + r); ++x) flux.at(x, y) = u(rng);
     }
-    flux.at(size - 1, size / 2) = std::numeric_limits<float>::quiet_NaN();
-    flux.at(0, size - 1) = 1e-42f;
+    flux.at(width - 1, height / 2) = std::numeric_limits<float>::quiet_NaN();
+    flux.at(0, height - 1) = 1e-42f;
 }
 
 TEST(LookupMask, BitsMatchTheirDefinition) {
     std::mt19937 rng(7);
-    for (int size : {2, 5, 63, 64, 65, 130}) {
+    for (auto [width, height] : {std::pair{2, 2}, {5, 5}, {63, 63}, {64, 64}, {65, 65}, {130, 130}, {65, 3}, {1, 5}, {130, 2}, {3, 70}}) {
+        const std::string size = std::to_string(width) + " x " + std::to_string(height);
         PositionsTexture tex;
         tex.maps.resize(2);
         std::vector<Image> flux(2);
-        for (int f = 0; f < 2; ++f) random_face(tex.maps[static_cast<std::size_t>(f)], flux[static_cast<std::size_t>(f)], size, rng);
+        for (int f = 0; f < 2; ++f)
+            random_face(tex.maps[static_cast<std::size_t>(f)], flux[static_cast<std::size_t>(f)], width, height, rng);
         LookupMask mask;
         mask.build(tex, flux);
         int set = 0, clear = 0;
         for (std::size_t f = 0; f < 2; ++f)
-            for (int y = 0; y < size; ++y)
-                for (int x = 0; x < size; ++x) {
+            for (int y = 0; y < height; ++y)
+                for (int x = 0; x < width; ++x) {
                     const bool bit = LookupMask::test(mask.face(f), mask.words(), x, y);
                     ASSERT_EQ(bit, expected_bit(tex.maps[f], flux[f], x, y)) << "size " << size << " face " << f << " texel " << x << ", " << y;
                     (bit ? set : clear)++;
                 }
-        if (size >= 63) {
+        if (width * height >= 63 * 63) {
             EXPECT_GT(clear, 0) << size;
         }
         EXPECT_GT(set, 0) << size;
         // Box queries against a scan of the bits.
-        std::uniform_int_distribution<int> at(0, size - 1);
+        std::uniform_int_distribution<int> at_x(0, width - 1), at_y(0, height - 1);
         for (int k = 0; k < 2000; ++k) {
-            int x0 = at(rng), x1 = at(rng), y0 = at(rng), y1 = at(rng);
+            int x0 = at_x(rng), x1 = at_x(rng), y0 = at_y(rng), y1 = at_y(rng);
             if (x0 > x1) std::swap(x0, x1);
             if (y0 > y1) std::swap(y0, y1);
             bool scan = false;
@@ -102,7 +105,8 @@ PositionsTexture floor_texture(const FrameGeometry& frame, std::vector<LightProj
     return tex;
 }
 
-// Camera points: on the floor (some beyond the light's window), on the occluder, and a few not covered.
+// Camera points: on the floor (some beyond the light's window), on the occluder, a few above the point
+// light (behind its near plane) and a few not covered.
 CameraGBuffer camera_points(std::mt19937& rng) {
     CameraGBuffer gb;
     gb.width = 96, gb.height = 64;
@@ -115,6 +119,7 @@ CameraGBuffer camera_points(std::mt19937& rng) {
         const float r = v(rng);
         if (r < 0.05f) gb.covered[i] = 0;
         else if (r < 0.15f) gb.position[i] = {0.6f * v(rng) - 0.3f, 0.6f * v(rng) - 0.3f, 0.5f};
+        else if (r < 0.18f) gb.position[i] = {u(rng), u(rng), 3.5f};
         else gb.position[i] = {u(rng), u(rng), 0.0f};
     }
     return gb;
