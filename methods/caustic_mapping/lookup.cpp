@@ -141,14 +141,7 @@ inline double irradiance_at_texel(const Face& f, const glm::dvec3& v, double inv
 // Texel coordinates (px, py) of view-space point v (perspective: in front of the eye), and 1 / depth.
 template <bool kPerspective>
 inline void project(const Face& f, const glm::dvec3& v, double& inv_depth, double& px, double& py) {
-    double x = v.x, y = v.y;
-    inv_depth = 1.0;
-    if constexpr (kPerspective) {
-        inv_depth = 1.0 / v.z;
-        x *= inv_depth;
-        y *= inv_depth;
-    }
-    px = (x - f.x0) * f.sx, py = (f.y1 - y) * f.sy;
+    texel_coordinates<kPerspective>(f.x0, f.y1, f.sx, f.sy, v.x, v.y, v.z, inv_depth, px, py);
 }
 
 // Irradiance at view-space point v of face f (irradiance_at_texel; a point behind the near plane is

@@ -18,12 +18,7 @@ struct LaneWriter {
     template <bool kPerspective>
     void put(int i, double x, double y, double z) const {
         vx[i] = x, vy[i] = y, vz[i] = z;
-        if constexpr (kPerspective) {
-            const double id = 1.0 / z;
-            inv[i] = id, px[i] = (x * id - x0) * sx, py[i] = (y1 - y * id) * sy;
-        } else {
-            inv[i] = 1.0, px[i] = (x - x0) * sx, py[i] = (y1 - y) * sy;
-        }
+        texel_coordinates<kPerspective>(x0, y1, sx, sy, x, y, z, inv[i], px[i], py[i]);
     }
 };
 

@@ -19,6 +19,21 @@ struct ViewProjection {
     double x0 = 0, y1 = 0, sx = 1, sy = 1;   // px = (x - x0) sx, py = (y1 - y) sy
 };
 
+// One point's 1 / depth and texel coordinates from its view-space coordinates (x, y, z): in
+// perspective inv_depth = 1 / z and x, y scaled by it; orthographic inv_depth = 1.
+template <bool kPerspective>
+inline void texel_coordinates(double x0, double y1, double sx, double sy, double x, double y, double z,
+                              double& inv_depth, double& px, double& py) {
+    if constexpr (kPerspective) {
+        inv_depth = 1.0 / z;
+        x *= inv_depth;
+        y *= inv_depth;
+    } else {
+        inv_depth = 1.0;
+    }
+    px = (x - x0) * sx, py = (y1 - y) * sy;
+}
+
 // The lanes' outputs, one entry per point.
 struct RowLanes {
     std::vector<double> vx, vy, vz, inv_depth, px, py;
