@@ -145,7 +145,8 @@ TEST(CausticMappingSplats, SphereSilhouetteSplatsHaveNeighbours) {
 // lies inside the 3.5-sigma ellipse gets value exp(-q) / sum of exp(-q) over those texels, q = d^T
 // Sigma^-1 d / 2. Narrow (the normalising sum over texels), wide (the closed-form normalisation), clipped,
 // and long and sheared at 45 degrees (the largest footprint the clamp allows, 18.3 by 0.6 texels: its
-// expanded quadratic form has terms of 1e3 that cancel). The weights are computed in single precision
+// expanded quadratic form has terms of 1e3 that cancel), narrow with rows longer than one chunk of the
+// normalising pass, and narrow at the image's last texel (its rows' chunks reach past the image's end). The weights are computed in single precision
 // as a t^2 + c0 with both terms in [0, 6.1] (the cut-off q) and |t| within the chord: a few roundings of
 // 6e-8 relative each bound the error of q by about 3e-6, and the exponential's polynomial adds 1.2e-7;
 // a texel's value is a weight over a sum of such weights, so its relative error is below 8e-6, the
@@ -157,6 +158,8 @@ TEST(CausticMappingSplats, EllipticWeightsMatchTheirDefinition) {
         {{31.6f, 24.2f}, 1.5f, {9.0f, 4.0f, 6.0f}},           // wide, sheared: closed-form normalisation
         {{2.4f, 145.1f}, 3.0f, {16.0f, -3.0f, 4.0f}},         // clipped by the image's corner
         {{80.3f, 74.6f}, 1.0f, {167.3f, 166.9f, 167.3f}},     // long and thin at 45 degrees
+        {{139.7f, 60.2f}, 2.5f, {30.0f, 0.4f, 0.3f}},         // narrow, rows of up to 38 texels (several chunks)
+        {{157.5f, 146.5f}, 1.0f, {0.3f, 0.1f, 0.8f}},         // narrow, wholly inside, at the last row's end
     };
     for (const EllipticSplat& s : cases) {
         Image img(W, H);
