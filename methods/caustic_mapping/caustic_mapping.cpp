@@ -84,6 +84,7 @@ private:
     PositionsTexture back_tex_;     // the back faces of closed dielectrics (one face, grid x grid)
     GBufferRaster raster_;
     SplatRaster splatter_;
+    EllipticSplatter elliptic_splatter_;
     std::vector<FaceSplat> landing_;   // per grid texel: where its light lands (value 0: nowhere)
     std::vector<std::vector<Splat>> face_splats_;
     std::vector<std::vector<EllipticSplat>> face_ellipses_;
@@ -404,7 +405,7 @@ CausticOutput CausticMapping::render(const FrameGeometry& frame, const RenderReq
     for (std::size_t f = 0; f < faces; ++f) {
         if (caustic_[f].width != s_.map || caustic_[f].height != s_.map) caustic_[f] = Image(s_.map, s_.map);
         else std::fill(caustic_[f].pixels.begin(), caustic_[f].pixels.end(), 0.0f);
-        const SplatStats st = s_.elliptic ? draw_elliptic(face_ellipses_[f], caustic_[f])
+        const SplatStats st = s_.elliptic ? elliptic_splatter_.draw(face_ellipses_[f], caustic_[f])
                                           : splatter_.draw(face_splats_[f], s_.splat, radius_used_, caustic_[f]);
         splat_stats.splatted += st.splatted, splat_stats.outside += st.outside, splat_stats.nonfinite += st.nonfinite;
         if (s_.lowpass >= 1.0) gaussian_lowpass(caustic_[f], s_.lowpass);

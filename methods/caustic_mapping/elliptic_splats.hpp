@@ -16,6 +16,7 @@
 // sum over preimages of the flux-conservation form of the caustic. sigma0 keeps a footprint of at
 // least about one caustic-map texel where J is singular (on a fold).
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -44,6 +45,22 @@ int build_elliptic_splats(const std::vector<FaceSplat>& landing, int grid, float
 
 // Adds the splats to `target`, each normalised over its whole footprint (the part outside the image is
 // reported, not renormalised). Deterministic for any thread count (bands of rows, splats in order).
+// Keeps its buffers between draws, so that a frame allocates nothing once they have grown.
+class EllipticSplatter {
+public:
+    EllipticSplatter();
+    ~EllipticSplatter();
+    EllipticSplatter(EllipticSplatter&&) noexcept;
+    EllipticSplatter& operator=(EllipticSplatter&&) noexcept;
+
+    SplatStats draw(const std::vector<EllipticSplat>& splats, Image& target);
+
+private:
+    struct Buffers;
+    std::unique_ptr<Buffers> buffers_;
+};
+
+// One draw with buffers of its own.
 SplatStats draw_elliptic(const std::vector<EllipticSplat>& splats, Image& target);
 
 }  // namespace caustics::caustic_mapping

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <memory>
 #include <string>
@@ -208,20 +209,29 @@ TEST(CausticMappingSplats, EllipticWeightsMatchTheirDefinition) {
 // Many splats in one call (more than one group of kept weights, several bands, narrow ones whose
 // weights are kept and reused, wide, clipped and off-image ones recomputed) give exactly the image of
 // drawing them one at a time in the same order: every texel receives the same values in the same order.
-TEST(CausticMappingSplats, EllipticBatchEqualsOneAtATime) {
-    const int W = 200, H = 120;
+namespace {
+
+// count random splats over a W x H image and 10 texels around it: narrow, wide, clipped and off-image.
+std::vector<EllipticSplat> random_splats(int count, int W, int H, std::uint32_t state) {
     std::vector<EllipticSplat> splats;
-    std::uint32_t state = 12345u;
     auto uniform = [&] {
         state = state * 1664525u + 1013904223u;
         return static_cast<float>(state >> 8) / 16777216.0f;
     };
-    for (int k = 0; k < 700; ++k) {
+    for (int k = 0; k < count; ++k) {
         const float major = 0.05f + 6.0f * uniform(), minor = 0.05f + (k % 3 == 0 ? 2.0f : 0.6f) * uniform();
         const float angle = 3.14159f * uniform(), c = std::cos(angle), s = std::sin(angle);
         const glm::vec3 cov(major * c * c + minor * s * s, (major - minor) * c * s, major * s * s + minor * c * c);
         splats.push_back({{-10.0f + (W + 20.0f) * uniform(), -10.0f + (H + 20.0f) * uniform()}, 0.5f + uniform(), cov});
     }
+    return splats;
+}
+
+}  // namespace
+
+TEST(CausticMappingSplats, EllipticBatchEqualsOneAtATime) {
+    const int W = 200, H = 120;
+    const std::vector<EllipticSplat> splats = random_splats(700, W, H, 12345u);
     Image batch(W, H), single(W, H);
     const SplatStats st = draw_elliptic(splats, batch);
     for (const EllipticSplat& s : splats) draw_elliptic({s}, single);
@@ -229,4 +239,28 @@ TEST(CausticMappingSplats, EllipticBatchEqualsOneAtATime) {
     EXPECT_GT(st.value_outside, 0.0);   // some footprints are clipped by the image's edges
     for (int j = 0; j < H; ++j)
         for (int i = 0; i < W; ++i) ASSERT_EQ(batch.at(i, j), single.at(i, j)) << i << "," << j;
+}
+
+// A splatter keeps its buffers between draws: draws of different sizes in sequence (larger, then smaller
+// with splats that are not drawn, then an image of another size) give exactly the images of fresh draws.
+TEST(CausticMappingSplats, EllipticSplatterReusedEqualsFresh) {
+    std::vector<EllipticSplat> with_invalid = random_splats(150, 90, 70, 777u);
+    with_invalid[3].pixel.x = std::numeric_limits<float>::quiet_NaN();   // not finite: not drawn
+    with_invalid[40].cov = glm::vec3(1.0f, 2.0f, 1.0f);                   // not positive definite
+    const struct {
+        std::vector<EllipticSplat> splats;
+        int W, H;
+    } draws[] = {{random_splats(900, 200, 120, 99u), 200, 120}, {with_invalid, 90, 70}, {random_splats(600, 300, 40, 5u), 300, 40}};
+    EllipticSplatter reused;
+    for (const auto& d : draws) {
+        Image a(d.W, d.H), b(d.W, d.H);
+        const SplatStats sa = reused.draw(d.splats, a), sb = draw_elliptic(d.splats, b);
+        EXPECT_EQ(sa.splatted, sb.splatted);
+        EXPECT_EQ(sa.outside, sb.outside);
+        EXPECT_EQ(sa.nonfinite, sb.nonfinite);
+        EXPECT_EQ(sa.value_inside, sb.value_inside);
+        EXPECT_GT(sa.splatted, 100);
+        for (int j = 0; j < d.H; ++j)
+            for (int i = 0; i < d.W; ++i) ASSERT_EQ(a.at(i, j), b.at(i, j)) << i << "," << j;
+    }
 }
