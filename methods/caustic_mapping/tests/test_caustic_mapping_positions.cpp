@@ -38,11 +38,13 @@ GBuffer irregular_coverage(int W, int H) {
     g.clear(W, H, DepthTest::Less, false);
     for (int y = 0; y < H; ++y)
         for (int x = 0; x < W; ++x) {
-            // A disk, a separate bar, a column band and a row left empty, a lone texel.
+            // A disk, a separate bar, a column band and a row left empty, lone texels (at the first and last
+    // columns and rows, and at a multiple of the scans' 16 texels from either end).
             const double dx = x - 0.4 * W, dy = y - 0.5 * H;
             const bool disk = dx * dx + dy * dy < 0.09 * W * H;
             const bool bar = x >= W - 12 && x < W - 4 && y > 3 && y < H - 10;
-            const bool lone = x == 3 && y == H - 2;
+            const bool lone = (x == 3 && y == H - 2) || (x == W - 1 && y == 2) || (x == 0 && y == H / 3) ||
+                              (x == 16 && y == 1) || (x == W - 17 && y == H - 1);
             if (!(disk || bar || lone) || (x >= 20 && x < 23) || y == 7) continue;
             const std::size_t i = g.index(x, y);
             g.id[i] = 1;
@@ -56,8 +58,11 @@ GBuffer irregular_coverage(int W, int H) {
 
 TEST(CausticMappingPositions, ExtendMatchesSerialRowsThenColumns) {
     // 200: past the texture's size, as the method's default (extend to the whole map) is.
+    // 150 x 90: columns in more than one block of 64, and a last partial block; 128 x 64: whole blocks
+    // (their rows scanned in vectors); 17 x 33: rows one past a whole scan of 16.
+    for (const glm::ivec2 size : {glm::ivec2(150, 90), glm::ivec2(128, 64), glm::ivec2(17, 33)})
     for (int texels : {1, 4, 32, 200}) {
-        const int W = 150, H = 90;   // columns in more than one block of 64
+        const int W = size.x, H = size.y;
         GBuffer fast = irregular_coverage(W, H), serial = irregular_coverage(W, H);
         extend_positions(fast, texels);
         for (int y = 0; y < H; ++y) extend_line_serial(serial, W, texels, [&](int k) { return serial.index(k, y); });
