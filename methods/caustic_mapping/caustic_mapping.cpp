@@ -403,8 +403,16 @@ CausticOutput CausticMapping::render(const FrameGeometry& frame, const RenderReq
     caustic_.resize(faces);
     SplatStats splat_stats;
     for (std::size_t f = 0; f < faces; ++f) {
-        if (caustic_[f].width != s_.map || caustic_[f].height != s_.map) caustic_[f] = Image(s_.map, s_.map);
-        else std::fill(caustic_[f].pixels.begin(), caustic_[f].pixels.end(), 0.0f);
+        if (caustic_[f].width != s_.map || caustic_[f].height != s_.map) {
+            caustic_[f] = Image(s_.map, s_.map);
+        } else {   // 2.4 MB at map 768: cleared by both threads
+            auto& px = caustic_[f].pixels;
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, px.size(), std::size_t{1} << 16),
+                              [&](const tbb::blocked_range<std::size_t>& r) {
+                                  std::fill(px.begin() + static_cast<std::ptrdiff_t>(r.begin()),
+                                            px.begin() + static_cast<std::ptrdiff_t>(r.end()), 0.0f);
+                              });
+        }
         const SplatStats st = s_.elliptic ? elliptic_splatter_.draw(face_ellipses_[f], caustic_[f])
                                           : splatter_.draw(face_splats_[f], s_.splat, radius_used_, caustic_[f]);
         splat_stats.splatted += st.splatted, splat_stats.outside += st.outside, splat_stats.nonfinite += st.nonfinite;

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <bit>
 #include <cmath>
 
@@ -250,12 +251,8 @@ CAUSTICS_AVX2_CLONES void draw_rows(const Print& p, glm::dvec2 c, int j0, int j1
 
 int build_elliptic_splats(const std::vector<FaceSplat>& landing, int grid, float min_radius,
                           std::vector<std::vector<EllipticSplat>>& per_face) {
-    // The isotropic footprints first (same order: landed texels row-major, per face): the fallback where
-    // an axis has no landed neighbour.
-    std::vector<std::vector<Splat>> iso(per_face.size());
-    const int isolated = build_splats(landing, grid, FootprintMode::Adaptive, min_radius, iso);
-    for (auto& v : per_face) v.clear();
     const int g = grid;
+    const std::size_t faces = per_face.size();
     const float sigma0 = min_radius / kEllipticCutoff;
     auto at = [&](int x, int y, int face) -> const Splat* {
         if (x < 0 || y < 0 || x >= g || y >= g) return nullptr;
@@ -272,26 +269,48 @@ int build_elliptic_splats(const std::vector<FaceSplat>& landing, int grid, float
         else return false;
         return true;
     };
-    std::vector<std::size_t> next(per_face.size(), 0);
-    for (int y = 0; y < g; ++y)
+    // Each face's splats in the order of the landed texels (row-major): each row's first slot per face
+    // from a count first, so that the rows can then be built in parallel into their slots.
+    std::vector<std::size_t> row_slot(static_cast<std::size_t>(g) * faces);
+    std::vector<std::size_t> count(faces, 0);
+    for (int y = 0; y < g; ++y) {
+        for (std::size_t f = 0; f < faces; ++f) row_slot[static_cast<std::size_t>(y) * faces + f] = count[f];
         for (int x = 0; x < g; ++x) {
             const FaceSplat& fs = landing[static_cast<std::size_t>(y) * g + x];
-            if (!(fs.splat.value > 0.0f)) continue;
-            const std::size_t face = static_cast<std::size_t>(fs.face);
-            const Splat& fallback = iso[face][next[face]++];
-            glm::vec2 jx, jy;
-            glm::vec3 cov;
-            if (column(x, y, fs.face, fs.splat, 1, 0, jx) && column(x, y, fs.face, fs.splat, 0, 1, jy)) {
-                const float s2 = kEllipticSigma * kEllipticSigma, o2 = sigma0 * sigma0;
-                cov = {s2 * (jx.x * jx.x + jy.x * jy.x) + o2, s2 * (jx.x * jx.y + jy.x * jy.y),
-                       s2 * (jx.y * jx.y + jy.y * jy.y) + o2};
-            } else {
-                const float s = fallback.radius / kEllipticCutoff;
-                cov = {s * s, 0.0f, s * s};
-            }
-            per_face[face].push_back({fs.splat.pixel, fs.splat.value, clamp_cov(cov, sigma0)});
+            if (fs.splat.value > 0.0f) ++count[static_cast<std::size_t>(fs.face)];
         }
-    return isolated;
+    }
+    for (std::size_t f = 0; f < faces; ++f) per_face[f].resize(count[f]);
+    std::atomic<int> isolated{0};
+    tbb::parallel_for(tbb::blocked_range<int>(0, g, 8), [&](const tbb::blocked_range<int>& rows) {
+        int lone = 0;
+        for (int y = rows.begin(); y != rows.end(); ++y) {
+            std::size_t* slot = &row_slot[static_cast<std::size_t>(y) * faces];
+            for (int x = 0; x < g; ++x) {
+                const FaceSplat& fs = landing[static_cast<std::size_t>(y) * g + x];
+                if (!(fs.splat.value > 0.0f)) continue;
+                const std::size_t face = static_cast<std::size_t>(fs.face);
+                glm::vec2 jx, jy;
+                glm::vec3 cov;
+                if (column(x, y, fs.face, fs.splat, 1, 0, jx) && column(x, y, fs.face, fs.splat, 0, 1, jy)) {
+                    const float s2 = kEllipticSigma * kEllipticSigma, o2 = sigma0 * sigma0;
+                    cov = {s2 * (jx.x * jx.x + jy.x * jy.x) + o2, s2 * (jx.x * jx.y + jy.x * jy.y),
+                           s2 * (jx.y * jx.y + jy.y * jy.y) + o2};
+                } else {
+                    // An axis without a landed neighbour: the isotropic footprint of splats.hpp (the larger
+                    // spacing from the diagonals or the nearest ring). A texel with both axes always has
+                    // one, so only these can be isolated.
+                    float radius = min_radius;
+                    if (!adaptive_radius(landing, g, x, y, min_radius, radius)) ++lone;
+                    const float s = radius / kEllipticCutoff;
+                    cov = {s * s, 0.0f, s * s};
+                }
+                per_face[face][slot[face]++] = {fs.splat.pixel, fs.splat.value, clamp_cov(cov, sigma0)};
+            }
+        }
+        isolated += lone;
+    });
+    return isolated.load();
 }
 
 // The buffers of one draw, kept between draws: a frame's splats need several MB of them (on the sphere

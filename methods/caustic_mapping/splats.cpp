@@ -7,35 +7,41 @@
 
 namespace caustics::caustic_mapping {
 
-int build_splats(const std::vector<FaceSplat>& landing, int grid, FootprintMode mode, float radius,
-                 std::vector<std::vector<Splat>>& per_face) {
-    for (auto& v : per_face) v.clear();
+namespace {
+
+// The landing point of texel (x, y) when it lands on `face`, else null.
+const Splat* landed(const std::vector<FaceSplat>& landing, int g, int x, int y, int face) {
+    if (x < 0 || y < 0 || x >= g || y >= g) return nullptr;
+    const FaceSplat& o = landing[static_cast<std::size_t>(y) * g + x];
+    return o.splat.value > 0.0f && o.face == face ? &o.splat : nullptr;
+}
+
+// Landing-point spacing along the grid offset (dx, dy): central difference, one-sided at an edge of the
+// lit region; false when neither neighbour lands on the same face.
+bool spacing(const std::vector<FaceSplat>& landing, int g, int x, int y, int face, const Splat& c, int dx, int dy,
+             float& len) {
+    const Splat* p = landed(landing, g, x + dx, y + dy, face);
+    const Splat* m = landed(landing, g, x - dx, y - dy, face);
+    glm::vec2 d;
+    if (p && m) d = 0.5f * (p->pixel - m->pixel);
+    else if (p) d = p->pixel - c.pixel;
+    else if (m) d = c.pixel - m->pixel;
+    else return false;
+    len = glm::length(d);
+    return true;
+}
+
+}  // namespace
+
+bool adaptive_radius(const std::vector<FaceSplat>& landing, int grid, int x, int y, float min_radius, float& radius) {
     const int g = grid;
-    int isolated = 0;
-    // The landing point of texel (x, y) when it lands on `face`, else null.
-    auto at = [&](int x, int y, int face) -> const Splat* {
-        if (x < 0 || y < 0 || x >= g || y >= g) return nullptr;
-        const FaceSplat& o = landing[static_cast<std::size_t>(y) * g + x];
-        return o.splat.value > 0.0f && o.face == face ? &o.splat : nullptr;
-    };
-    // Landing-point spacing along the grid offset (dx, dy): central difference, one-sided at an edge of
-    // the lit region; false when neither neighbour lands on the same face.
-    auto spacing = [&](int x, int y, int face, const Splat& c, int dx, int dy, float& len) {
-        const Splat* p = at(x + dx, y + dy, face);
-        const Splat* m = at(x - dx, y - dy, face);
-        glm::vec2 d;
-        if (p && m) d = 0.5f * (p->pixel - m->pixel);
-        else if (p) d = p->pixel - c.pixel;
-        else if (m) d = c.pixel - m->pixel;
-        else return false;
-        len = glm::length(d);
-        return true;
-    };
-    // The larger spacing of the lattice around texel (x, y) from whatever neighbours land; false if none
-    // within kNeighbourSearch texels does.
-    auto larger_spacing = [&](int x, int y, int face, const Splat& c, float& s) {
+    const FaceSplat& fs = landing[static_cast<std::size_t>(y) * g + x];
+    const int face = fs.face;
+    const Splat& c = fs.splat;
+    // The larger spacing of the lattice around texel (x, y) from whatever neighbours land.
+    auto larger_spacing = [&](float& s) {
         float sx = 0.0f, sy = 0.0f;
-        const bool hx = spacing(x, y, face, c, 1, 0, sx), hy = spacing(x, y, face, c, 0, 1, sy);
+        const bool hx = spacing(landing, g, x, y, face, c, 1, 0, sx), hy = spacing(landing, g, x, y, face, c, 0, 1, sy);
         s = std::max(sx, sy);
         if (hx && hy) return true;
         // An axis without neighbours (the object's silhouette in the grid, or next to rays lost to TIR or
@@ -44,8 +50,8 @@ int build_splats(const std::vector<FaceSplat>& landing, int grid, FootprintMode 
         // errs on the wide side instead of collapsing to the minimum where grazing rays spread the most.
         float d = 0.0f;
         bool found = hx || hy;
-        if (spacing(x, y, face, c, 1, 1, d)) s = std::max(s, d), found = true;
-        if (spacing(x, y, face, c, 1, -1, d)) s = std::max(s, d), found = true;
+        if (spacing(landing, g, x, y, face, c, 1, 1, d)) s = std::max(s, d), found = true;
+        if (spacing(landing, g, x, y, face, c, 1, -1, d)) s = std::max(s, d), found = true;
         if (found) return true;
         // No neighbour at all: the mean spacing to the landing points on the nearest ring of texels
         // (Chebyshev distance k) that has any, the largest over that ring.
@@ -53,7 +59,7 @@ int build_splats(const std::vector<FaceSplat>& landing, int grid, FootprintMode 
             for (int j = -k; j <= k; ++j)
                 for (int i = -k; i <= k; ++i) {
                     if (std::max(std::abs(i), std::abs(j)) != k) continue;
-                    const Splat* n = at(x + i, y + j, face);
+                    const Splat* n = landed(landing, g, x + i, y + j, face);
                     if (!n) continue;
                     s = std::max(s, glm::length(n->pixel - c.pixel) / std::sqrt(static_cast<float>(i * i + j * j)));
                     found = true;
@@ -62,17 +68,25 @@ int build_splats(const std::vector<FaceSplat>& landing, int grid, FootprintMode 
         }
         return false;
     };
+    float s = 0.0f;
+    const bool found = larger_spacing(s);
+    radius = std::clamp(kAdaptiveScale * s, min_radius, kMaxAdaptiveRadius);
+    return found;
+}
+
+int build_splats(const std::vector<FaceSplat>& landing, int grid, FootprintMode mode, float radius,
+                 std::vector<std::vector<Splat>>& per_face) {
+    for (auto& v : per_face) v.clear();
+    const int g = grid;
+    int isolated = 0;
     for (int y = 0; y < g; ++y)
         for (int x = 0; x < g; ++x) {
             const FaceSplat& fs = landing[static_cast<std::size_t>(y) * g + x];
             if (!(fs.splat.value > 0.0f)) continue;
             Splat sp = fs.splat;
             sp.radius = radius;
-            if (mode == FootprintMode::Adaptive) {
-                float s = 0.0f;
-                if (!larger_spacing(x, y, fs.face, sp, s)) ++isolated;   // kept at the minimum footprint
-                sp.radius = std::clamp(kAdaptiveScale * s, radius, kMaxAdaptiveRadius);
-            }
+            if (mode == FootprintMode::Adaptive && !adaptive_radius(landing, g, x, y, radius, sp.radius))
+                ++isolated;   // kept at the minimum footprint
             per_face[static_cast<std::size_t>(fs.face)].push_back(sp);
         }
     return isolated;

@@ -34,6 +34,10 @@ constexpr float kAdaptiveScale = 1.75f;
 constexpr float kMaxAdaptiveRadius = 64.0f;
 constexpr int kNeighbourSearch = 4;
 
+// The Adaptive footprint radius of landed texel (x, y) (landing[y * grid + x] has a value > 0), at least
+// min_radius; false when no landed neighbour lies within kNeighbourSearch texels (then min_radius).
+bool adaptive_radius(const std::vector<FaceSplat>& landing, int grid, int x, int y, float min_radius, float& radius);
+
 // Appends the splats of the grid x grid landing points to per_face[face] (cleared first; one vector per
 // face, reused between frames so that no frame allocates once they have grown). Returns the number of
 // adaptive splats with no landed neighbour within kNeighbourSearch texels (kept at the minimum radius).

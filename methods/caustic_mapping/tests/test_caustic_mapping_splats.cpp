@@ -264,3 +264,75 @@ TEST(CausticMappingSplats, EllipticSplatterReusedEqualsFresh) {
             for (int i = 0; i < d.W; ++i) ASSERT_EQ(a.at(i, j), b.at(i, j)) << i << "," << j;
     }
 }
+
+// build_elliptic_splats against its rule, texel by texel, on a 64 x 64 lattice over two faces with
+// holes and lone texels (its rows are built in parallel into slots counted beforehand): each face's
+// splats in row-major order of its landed texels, with their landing point and flux; covariance
+// s^2 J J^T + sigma0^2 I from central (or one-sided) differences where both axes have a landed
+// neighbour on the same face, else isotropic from build_splats' adaptive footprint; the isolated count
+// equal to build_splats'. The lattice's spacings (5 and 2.8 texels) keep every covariance inside the
+// clamp's range, so the rule's values are compared exactly.
+TEST(CausticMappingSplats, EllipticSplatsFollowTheirRule) {
+    const int g = 64;
+    std::vector<FaceSplat> landing(static_cast<std::size_t>(g) * g);
+    for (int y = 0; y < g; ++y)
+        for (int x = 0; x < g; ++x) {
+            const int face = (x / 20 + y / 24) % 2;   // patches of two faces
+            const bool hole = (x * 7 + y * 13) % 11 == 0 || (x > 40 && x < 44);
+            const bool lone = (x == 50 && y == 10) || (x == 2 && y == 60);
+            const bool ring = std::abs(x - 50) <= 3 && std::abs(y - 10) <= 3 && !(x == 50 && y == 10);
+            const float value = hole || ring ? 0.0f : 1.0f + 0.01f * static_cast<float>(x + y);
+            landing[static_cast<std::size_t>(y) * g + x] = {
+                lone ? 1 : face, {glm::vec2(10.0f) + static_cast<float>(x) * kJx + static_cast<float>(y) * kJy, lone ? 2.0f : value}};
+        }
+    const float min_radius = 1.0f, sigma0 = min_radius / kEllipticCutoff;
+    std::vector<std::vector<EllipticSplat>> got(2);
+    std::vector<std::vector<Splat>> iso(2);
+    const int isolated = build_elliptic_splats(landing, g, min_radius, got);
+    EXPECT_EQ(isolated, build_splats(landing, g, FootprintMode::Adaptive, min_radius, iso));
+    EXPECT_GE(isolated, 1);   // the lone texels
+    auto at = [&](int x, int y, int face) -> const FaceSplat* {
+        if (x < 0 || y < 0 || x >= g || y >= g) return nullptr;
+        const FaceSplat& o = landing[static_cast<std::size_t>(y) * g + x];
+        return o.splat.value > 0.0f && o.face == face ? &o : nullptr;
+    };
+    auto column = [&](int x, int y, int face, int dx, int dy, glm::vec2& j) {
+        const FaceSplat* p = at(x + dx, y + dy, face);
+        const FaceSplat* m = at(x - dx, y - dy, face);
+        const glm::vec2 c = landing[static_cast<std::size_t>(y) * g + x].splat.pixel;
+        if (p && m) j = 0.5f * (p->splat.pixel - m->splat.pixel);
+        else if (p) j = p->splat.pixel - c;
+        else if (m) j = c - m->splat.pixel;
+        else return false;
+        return true;
+    };
+    std::size_t next[2] = {0, 0};
+    int anisotropic = 0, fallback = 0;
+    for (int y = 0; y < g; ++y)
+        for (int x = 0; x < g; ++x) {
+            const FaceSplat& fs = landing[static_cast<std::size_t>(y) * g + x];
+            if (!(fs.splat.value > 0.0f)) continue;
+            const std::size_t f = static_cast<std::size_t>(fs.face);
+            ASSERT_LT(next[f], got[f].size());
+            const EllipticSplat& s = got[f][next[f]];
+            const Splat& is = iso[f][next[f]++];
+            EXPECT_EQ(s.pixel, fs.splat.pixel) << x << "," << y;
+            EXPECT_EQ(s.value, fs.splat.value) << x << "," << y;
+            glm::vec2 jx, jy;
+            glm::vec3 want;
+            if (column(x, y, fs.face, 1, 0, jx) && column(x, y, fs.face, 0, 1, jy)) {
+                const float s2 = kEllipticSigma * kEllipticSigma, o2 = sigma0 * sigma0;
+                want = {s2 * (jx.x * jx.x + jy.x * jy.x) + o2, s2 * (jx.x * jx.y + jy.x * jy.y), s2 * (jx.y * jx.y + jy.y * jy.y) + o2};
+                ++anisotropic;
+            } else {
+                const float r = is.radius / kEllipticCutoff;
+                want = {r * r, 0.0f, r * r};
+                ++fallback;
+            }
+            EXPECT_EQ(s.cov, want) << x << "," << y;
+        }
+    EXPECT_EQ(next[0], got[0].size());
+    EXPECT_EQ(next[1], got[1].size());
+    EXPECT_GT(anisotropic, 1000);
+    EXPECT_GT(fallback, 50);
+}
