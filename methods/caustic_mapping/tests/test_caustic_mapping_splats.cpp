@@ -147,7 +147,8 @@ TEST(CausticMappingSplats, SphereSilhouetteSplatsHaveNeighbours) {
 // Sigma^-1 d / 2. Narrow (the normalising sum over texels), wide (the closed-form normalisation), clipped,
 // and long and sheared at 45 degrees (the largest footprint the clamp allows, 18.3 by 0.6 texels: its
 // expanded quadratic form has terms of 1e3 that cancel), narrow with rows longer than one chunk of the
-// normalising pass, and narrow at the image's last texel (its rows' chunks reach past the image's end). The weights are computed in single precision
+// normalising pass, narrow at the image's last texel (its rows' chunks reach past the image's end), and
+// wide and clipped by the image's right edge. The weights are computed in single precision
 // as a t^2 + c0 with both terms in [0, 6.1] (the cut-off q) and |t| within the chord: a few roundings of
 // 6e-8 relative each bound the error of q by about 3e-6, and the exponential's polynomial adds 1.2e-7;
 // a texel's value is a weight over a sum of such weights, so its relative error is below 8e-6, the
@@ -161,6 +162,7 @@ TEST(CausticMappingSplats, EllipticWeightsMatchTheirDefinition) {
         {{80.3f, 74.6f}, 1.0f, {167.3f, 166.9f, 167.3f}},     // long and thin at 45 degrees
         {{139.7f, 60.2f}, 2.5f, {30.0f, 0.4f, 0.3f}},         // narrow, rows of up to 38 texels (several chunks)
         {{157.5f, 146.5f}, 1.0f, {0.3f, 0.1f, 0.8f}},         // narrow, wholly inside, at the last row's end
+        {{157.0f, 80.0f}, 2.0f, {16.0f, 2.0f, 9.0f}},         // wide, clipped by the right edge (rows end there)
     };
     for (const EllipticSplat& s : cases) {
         Image img(W, H);
