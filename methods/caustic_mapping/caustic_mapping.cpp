@@ -405,7 +405,7 @@ CausticOutput CausticMapping::render(const FrameGeometry& frame, const RenderReq
     for (std::size_t f = 0; f < faces; ++f) {
         if (caustic_[f].width != s_.map || caustic_[f].height != s_.map) {
             caustic_[f] = Image(s_.map, s_.map);
-        } else {   // 2.4 MB at map 768: cleared by both threads
+        } else {   // 2.4 MB at map 768: cleared in parallel
             auto& px = caustic_[f].pixels;
             tbb::parallel_for(tbb::blocked_range<std::size_t>(0, px.size(), std::size_t{1} << 16),
                               [&](const tbb::blocked_range<std::size_t>& r) {

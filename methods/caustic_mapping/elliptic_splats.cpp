@@ -6,6 +6,7 @@
 #include <atomic>
 #include <bit>
 #include <cmath>
+#include <limits>
 
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -16,6 +17,9 @@ namespace {
 
 constexpr int kBandRows = 16;
 constexpr float kMaxSigma = kMaxAdaptiveRadius / kEllipticCutoff;   // the isotropic footprint's cap
+// Half-widths of a support beyond this many texels are refused: build_elliptic_splats' reach at most
+// kMaxAdaptiveRadius (64), and a support of 1e6 texels across would take seconds to normalise.
+constexpr double kMaxHalfWidth = 4096.0;
 constexpr double kWideSigma = 1.0;   // texels: footprints at least this wide are normalised in closed form
 
 // Covariance with its eigenvalues clamped to [lo^2, kMaxSigma^2].
@@ -43,7 +47,8 @@ struct Print {
 };
 
 // One row of a splat's footprint whose weights were kept by the normalising pass: texels [i0, i0 + n)
-// of the row, their weights at KeptWeights::weights[w].
+// of the row, their weights at KeptWeights::weights[w], followed by zeros up to a multiple of kChunk
+// (footprint_sum_kept).
 struct KeptRow {
     std::int32_t i0, n;
     std::uint32_t w;
@@ -156,6 +161,16 @@ CAUSTICS_AVX2_CLONES void footprint_sums(const Print& p, glm::dvec2 c, int W, in
     }
 }
 
+constexpr int kChunk = 8;   // texels of a row evaluated together in the kept and wide footprints' loops
+
+inline int padded_length(int n) { return (n + kChunk - 1) / kChunk * kChunk; }
+
+// One chunk of a row: lanes k = 0 .. kChunk - 1 are texels i0 + k0 + k of the row; lanes k0 + k >= n are 0.
+struct Chunk {
+    float a, c0, t0;
+    std::int32_t k0, n;
+};
+
 // footprint_sums for a footprint wholly inside the image (then the sum over the image is the sum), which
 // also keeps each row's weights. Nearly every kept footprint is a narrow ellipse whose rows hold a few
 // texels (on the sphere scene 9 rows of 4.5 texels on average). A loop per row spent its time in a scalar
@@ -166,17 +181,9 @@ CAUSTICS_AVX2_CLONES void footprint_sums(const Print& p, glm::dvec2 c, int W, in
 // loop whose iterations are independent, so that the processor overlaps their chains. The weights are
 // row_sum's, element for element. They are summed per lane in double over the whole footprint and the
 // lanes added once in a fixed order: the same sum as row_sum's in another order (closer to the exact
-// one: no single-precision row sums), the same on every instruction set.
-constexpr int kChunk = 8;
-
-inline int padded_length(int n) { return (n + kChunk - 1) / kChunk * kChunk; }
-
-// One chunk of a row: lanes k = 0 .. kChunk - 1 are texels i0 + k0 + k of the row; lanes k0 + k >= n are 0.
-struct Chunk {
-    float a, c0, t0;
-    std::int32_t k0, n;
-};
-
+// one: no single-precision row sums), the same on every instruction set (footprint_sums, for the few
+// footprints that the image's edges clip, still sums rows in a vectorised reduction whose order depends
+// on it).
 CAUSTICS_AVX2_CLONES double footprint_sum_kept(const Print& p, glm::dvec2 c, KeptWeights& kept,
                                                std::vector<Chunk>& chunks) {
     chunks.clear();
@@ -207,27 +214,32 @@ CAUSTICS_AVX2_CLONES double footprint_sum_kept(const Print& p, glm::dvec2 c, Kep
     return ((lanes[0] + lanes[1]) + (lanes[2] + lanes[3])) + ((lanes[4] + lanes[5]) + (lanes[6] + lanes[7]));
 }
 
-// draw_rows for a splat whose weights were kept (wholly inside the image). Where the row's padded chunks
-// fit in the image's row, they are added whole: their padding adds +0, which leaves every texel's value
-// as it was (a texel never holds -0: the map starts at +0 and receives products of a weight >= 0).
+// draw_rows for a splat whose weights were kept (wholly inside the image): whole chunks of kChunk texels,
+// then the row's last chunk, whose lanes past the row's end (weight 0) write back the value they read
+// (a select, not an addition of 0: a texel outside every footprint keeps its bits, -0 and NaN included),
+// where the image's row has room for the chunk; one texel at a time otherwise.
 CAUSTICS_AVX2_CLONES void draw_kept_rows(const Print& p, const KeptWeights& kept, int j0, int j1, float scale,
                                          Image& target) {
-    const int W = target.width;
     for (int j = j0; j <= j1; ++j) {
         const KeptRow& r = kept.rows[static_cast<std::size_t>(p.kept_rows + (j - p.y0))];
         if (r.n == 0) continue;   // its i0 may lie one past the image's last column
         const float* __restrict w = kept.weights.data() + r.w;
         float* __restrict row = &target.at(r.i0, j);
-        const int padded = padded_length(r.n);
-        if (padded <= W - r.i0) {
-            for (int k0 = 0; k0 < padded; k0 += kChunk) {
+        const int n = r.n, whole = n / kChunk * kChunk;
+        for (int k0 = 0; k0 < whole; k0 += kChunk) {
 #pragma omp simd
-                for (int k = 0; k < kChunk; ++k) row[k0 + k] += scale * w[k0 + k];
+            for (int k = 0; k < kChunk; ++k) row[k0 + k] += scale * w[k0 + k];
+        }
+        if (whole == n) continue;
+        if (whole + kChunk <= target.width - r.i0) {
+#pragma omp simd
+            for (int k = 0; k < kChunk; ++k) {
+                const float v = row[whole + k];
+                row[whole + k] = whole + k < n ? v + scale * w[whole + k] : v;
             }
             continue;
         }
-#pragma omp simd
-        for (int k = 0; k < r.n; ++k) row[k] += scale * w[k];
+        for (int k = whole; k < n; ++k) row[k] += scale * w[k];
     }
 }
 
@@ -240,9 +252,9 @@ CAUSTICS_AVX2_CLONES void draw_rows(const Print& p, glm::dvec2 c, int j0, int j1
         const int n = r.i1 - r.i0 + 1;
         float* __restrict row = &target.at(r.i0, j);
         // Whole chunks of kChunk texels, then the rest as one more chunk whose lanes past the row's end
-        // add +0 where the image's row has room for them (no texel changes: see draw_kept_rows); one
-        // texel at a time otherwise. (The wide footprints' rows hold 28 texels on average on the sphere
-        // scene: a loop over n ended each of them in a scalar remainder of up to 7 exponentials.)
+        // write back what they read, as in draw_kept_rows. (The wide footprints' rows hold 28 texels on
+        // average on the sphere scene: a loop over n ended each in a scalar remainder of up to 7
+        // exponentials.)
         const int whole = n / kChunk * kChunk;
         for (int k0 = 0; k0 < whole; k0 += kChunk) {
 #pragma omp simd
@@ -256,8 +268,8 @@ CAUSTICS_AVX2_CLONES void draw_rows(const Print& p, glm::dvec2 c, int j0, int j1
 #pragma omp simd
             for (int k = 0; k < kChunk; ++k) {
                 const float t = static_cast<float>(whole + k) + t0;
-                const float e = neg_exp(a * t * t + c0);
-                row[whole + k] += scale * (whole + k < n ? e : 0.0f);
+                const float e = neg_exp(a * t * t + c0), v = row[whole + k];
+                row[whole + k] = whole + k < n ? v + scale * e : v;
             }
             continue;
         }
@@ -275,21 +287,6 @@ int build_elliptic_splats(const std::vector<FaceSplat>& landing, int grid, float
     const int g = grid;
     const std::size_t faces = per_face.size();
     const float sigma0 = min_radius / kEllipticCutoff;
-    auto at = [&](int x, int y, int face) -> const Splat* {
-        if (x < 0 || y < 0 || x >= g || y >= g) return nullptr;
-        const FaceSplat& o = landing[static_cast<std::size_t>(y) * g + x];
-        return o.splat.value > 0.0f && o.face == face ? &o.splat : nullptr;
-    };
-    // Column of J along grid offset (dx, dy): central difference, one-sided at an edge of the lit region.
-    auto column = [&](int x, int y, int face, const Splat& c, int dx, int dy, glm::vec2& j) {
-        const Splat* p = at(x + dx, y + dy, face);
-        const Splat* m = at(x - dx, y - dy, face);
-        if (p && m) j = 0.5f * (p->pixel - m->pixel);
-        else if (p) j = p->pixel - c.pixel;
-        else if (m) j = c.pixel - m->pixel;
-        else return false;
-        return true;
-    };
     // Each face's splats in the order of the landed texels (row-major): each row's first slot per face
     // from a count first, so that the rows can then be built in parallel into their slots.
     std::vector<std::size_t> row_slot(static_cast<std::size_t>(g) * faces);
@@ -306,14 +303,14 @@ int build_elliptic_splats(const std::vector<FaceSplat>& landing, int grid, float
     tbb::parallel_for(tbb::blocked_range<int>(0, g, 8), [&](const tbb::blocked_range<int>& rows) {
         int lone = 0;
         for (int y = rows.begin(); y != rows.end(); ++y) {
-            std::size_t* slot = &row_slot[static_cast<std::size_t>(y) * faces];
+            std::size_t* slot = row_slot.data() + static_cast<std::size_t>(y) * faces;
             for (int x = 0; x < g; ++x) {
                 const FaceSplat& fs = landing[static_cast<std::size_t>(y) * g + x];
                 if (!(fs.splat.value > 0.0f)) continue;
                 const std::size_t face = static_cast<std::size_t>(fs.face);
                 glm::vec2 jx, jy;
                 glm::vec3 cov;
-                if (column(x, y, fs.face, fs.splat, 1, 0, jx) && column(x, y, fs.face, fs.splat, 0, 1, jy)) {
+                if (lattice_step(landing, g, x, y, 1, 0, jx) && lattice_step(landing, g, x, y, 0, 1, jy)) {
                     const float s2 = kEllipticSigma * kEllipticSigma, o2 = sigma0 * sigma0;
                     cov = {s2 * (jx.x * jx.x + jy.x * jy.x) + o2, s2 * (jx.x * jx.y + jy.x * jy.y),
                            s2 * (jx.y * jx.y + jy.y * jy.y) + o2};
@@ -368,10 +365,13 @@ SplatStats EllipticSplatter::draw(const std::vector<EllipticSplat>& splats, Imag
     prints.resize(n);
     valid.assign(n, 0);
     inside.resize(n);
-    kept.resize((n + kKeptGroup - 1) / kKeptGroup);
+    // Groups only grow: draws of different sizes alternate (a cube map's faces), and shrinking would free
+    // the kept vectors of the groups past the smaller size.
+    const std::size_t groups_used = (n + kKeptGroup - 1) / kKeptGroup;
+    if (kept.size() < groups_used) kept.resize(groups_used);
     // Per splat: support, inverse covariance, normalisation over the whole support.
     // Whole groups per task, so that each group's kept weights are written by one thread, in order.
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, kept.size(), 4), [&](const tbb::blocked_range<std::size_t>& groups) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, groups_used, 4), [&](const tbb::blocked_range<std::size_t>& groups) {
         const std::size_t end = std::min(n, groups.end() * kKeptGroup);
         std::vector<Chunk>& chunks = bu.chunks.local();
         for (std::size_t g = groups.begin(); g != groups.end(); ++g) kept[g].rows.clear(), kept[g].weights.clear();
@@ -382,11 +382,12 @@ SplatStats EllipticSplatter::draw(const std::vector<EllipticSplat>& splats, Imag
                 std::abs(s.pixel.x) > 1e8f || std::abs(s.pixel.y) > 1e8f)
                 continue;
             const double a = s.cov.x, b = s.cov.y, d = s.cov.z, det = a * d - b * b;
-            if (!(det > 0.0) || !std::isfinite(det)) continue;
+            if (!(det > 0.0) || !std::isfinite(det) || !(a > 0.0) || !(d > 0.0)) continue;   // not positive definite
+            const double hx = kEllipticCutoff * std::sqrt(a), hy = kEllipticCutoff * std::sqrt(d);
+            if (hx > kMaxHalfWidth || hy > kMaxHalfWidth) continue;
             Print p{};
             p.ixx = 0.5 * d / det, p.ixy = -0.5 * b / det, p.iyy = 0.5 * a / det;
             set_chords(p);
-            const double hx = kEllipticCutoff * std::sqrt(a), hy = kEllipticCutoff * std::sqrt(d);
             p.x0 = static_cast<int>(std::ceil(s.pixel.x - 0.5 - hx)), p.x1 = static_cast<int>(std::floor(s.pixel.x - 0.5 + hx));
             p.y0 = static_cast<int>(std::ceil(s.pixel.y - 0.5 - hy)), p.y1 = static_cast<int>(std::floor(s.pixel.y - 0.5 + hy));
             double sum = 0.0, in = 0.0;
@@ -417,6 +418,7 @@ SplatStats EllipticSplatter::draw(const std::vector<EllipticSplat>& splats, Imag
                 in = (p.x0 >= 0 && p.y0 >= 0 && p.x0 < W && p.y0 < H) ? 1.0 : 0.0;
             }
             p.scale = s.value / sum;
+            if (!(std::abs(p.scale) <= std::numeric_limits<float>::max())) continue;   // drawn in float
             prints[k] = p;
             inside[k] = in / sum;
             valid[k] = 1;

@@ -45,6 +45,9 @@ int build_elliptic_splats(const std::vector<FaceSplat>& landing, int grid, float
 
 // Adds the splats to `target`, each normalised over its whole footprint (the part outside the image is
 // reported, not renormalised). Deterministic for any thread count (bands of rows, splats in order).
+// Texels outside every footprint keep their bits. Not drawn, and counted in `nonfinite`: splats with a
+// non-finite position or flux, a position beyond 1e8 texels, a covariance that is not positive definite
+// or whose support reaches beyond 4096 texels from its centre, or a normalised flux beyond float's range.
 // Keeps its buffers between draws, so that a frame allocates nothing once they have grown.
 class EllipticSplatter {
 public:

@@ -25,12 +25,7 @@ struct Texel {
 // id of texels filled by extend_positions (extrapolated, not a real receiver).
 constexpr std::int32_t kExtended = -2;
 
-// Extends the stored surfaces by up to `texels` texels beyond their outermost texels in each row, then
-// in each column (linear extrapolation of position and depth from the two outermost covered texels):
-// estimates near a receiver's edge then step over the edge instead of hitting the null value. Holes
-// between receivers are left empty. The new texels get id kExtended. Not in the paper (where such
-// splats are lost, Sec. III.D); extend=0 restores that behaviour.
-namespace extension {
+namespace extension_detail {
 
 // Whether any of id[0 .. n) is not -1 (n a multiple of kScan: whole vectors, no early exit inside).
 constexpr int kScan = 16;
@@ -42,8 +37,8 @@ inline bool any_drawn(const std::int32_t* id, int n) {
 }
 
 // The first and last texels of a row of W that are not -1 (a = W: none), scanning kScan texels at a
-// time: the rows' ends are mostly empty (the bunny scene's floor covers half of its 768^2 map), and one
-// texel at a time, the scans took a third of the extension's time.
+// time: the rows' ends are mostly empty (on the bunny scene 419k of the 590k texels are extended), and,
+// one texel at a time, the scans took a third of the extension's time.
 inline void drawn_range(const std::int32_t* id, int W, int& a, int& b) {
     a = 0;
     while (a + kScan <= W && !any_drawn(id + a, kScan)) a += kScan;
@@ -73,11 +68,16 @@ inline void fill_line(GBuffer& g, int lo, int hi, int e, std::size_t edge, std::
     }
 }
 
-}  // namespace extension
+}  // namespace extension_detail
 
+// Extends the stored surfaces by up to `texels` texels beyond their outermost texels in each row, then
+// in each column (linear extrapolation of position and depth from the two outermost covered texels):
+// estimates near a receiver's edge then step over the edge instead of hitting the null value. Holes
+// between receivers are left empty. The new texels get id kExtended. Not in the paper (where such
+// splats are lost, Sec. III.D); extend=0 restores that behaviour.
 inline void extend_positions(GBuffer& g, int texels) {
     if (texels <= 0) return;
-    using namespace extension;
+    using namespace extension_detail;
     const int W = g.width, H = g.height;
     // Extends line l (len texels, index(l, k)) whose outermost covered texels are a <= b.
     auto extend_line = [&](int len, int a, int b, auto index) {

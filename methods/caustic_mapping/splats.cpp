@@ -16,22 +16,26 @@ const Splat* landed(const std::vector<FaceSplat>& landing, int g, int x, int y, 
     return o.splat.value > 0.0f && o.face == face ? &o.splat : nullptr;
 }
 
-// Landing-point spacing along the grid offset (dx, dy): central difference, one-sided at an edge of the
-// lit region; false when neither neighbour lands on the same face.
-bool spacing(const std::vector<FaceSplat>& landing, int g, int x, int y, int face, const Splat& c, int dx, int dy,
-             float& len) {
-    const Splat* p = landed(landing, g, x + dx, y + dy, face);
-    const Splat* m = landed(landing, g, x - dx, y - dy, face);
+// Landing-point spacing along the grid offset (dx, dy): the length of lattice_step.
+bool spacing(const std::vector<FaceSplat>& landing, int g, int x, int y, int dx, int dy, float& len) {
     glm::vec2 d;
-    if (p && m) d = 0.5f * (p->pixel - m->pixel);
-    else if (p) d = p->pixel - c.pixel;
-    else if (m) d = c.pixel - m->pixel;
-    else return false;
+    if (!lattice_step(landing, g, x, y, dx, dy, d)) return false;
     len = glm::length(d);
     return true;
 }
 
 }  // namespace
+
+bool lattice_step(const std::vector<FaceSplat>& landing, int grid, int x, int y, int dx, int dy, glm::vec2& step) {
+    const FaceSplat& c = landing[static_cast<std::size_t>(y) * grid + x];
+    const Splat* p = landed(landing, grid, x + dx, y + dy, c.face);
+    const Splat* m = landed(landing, grid, x - dx, y - dy, c.face);
+    if (p && m) step = 0.5f * (p->pixel - m->pixel);
+    else if (p) step = p->pixel - c.splat.pixel;
+    else if (m) step = c.splat.pixel - m->pixel;
+    else return false;
+    return true;
+}
 
 bool adaptive_radius(const std::vector<FaceSplat>& landing, int grid, int x, int y, float min_radius, float& radius) {
     const int g = grid;
@@ -41,7 +45,7 @@ bool adaptive_radius(const std::vector<FaceSplat>& landing, int grid, int x, int
     // The larger spacing of the lattice around texel (x, y) from whatever neighbours land.
     auto larger_spacing = [&](float& s) {
         float sx = 0.0f, sy = 0.0f;
-        const bool hx = spacing(landing, g, x, y, face, c, 1, 0, sx), hy = spacing(landing, g, x, y, face, c, 0, 1, sy);
+        const bool hx = spacing(landing, g, x, y, 1, 0, sx), hy = spacing(landing, g, x, y, 0, 1, sy);
         s = std::max(sx, sy);
         if (hx && hy) return true;
         // An axis without neighbours (the object's silhouette in the grid, or next to rays lost to TIR or
@@ -50,8 +54,8 @@ bool adaptive_radius(const std::vector<FaceSplat>& landing, int grid, int x, int
         // errs on the wide side instead of collapsing to the minimum where grazing rays spread the most.
         float d = 0.0f;
         bool found = hx || hy;
-        if (spacing(landing, g, x, y, face, c, 1, 1, d)) s = std::max(s, d), found = true;
-        if (spacing(landing, g, x, y, face, c, 1, -1, d)) s = std::max(s, d), found = true;
+        if (spacing(landing, g, x, y, 1, 1, d)) s = std::max(s, d), found = true;
+        if (spacing(landing, g, x, y, 1, -1, d)) s = std::max(s, d), found = true;
         if (found) return true;
         // No neighbour at all: the mean spacing to the landing points on the nearest ring of texels
         // (Chebyshev distance k) that has any, the largest over that ring.

@@ -4,6 +4,8 @@
 #include <cstdint>
 #include <vector>
 
+#include <glm/glm.hpp>
+
 #include <caustics/blocks/splat/splat.hpp>
 
 namespace caustics::caustic_mapping {
@@ -33,6 +35,11 @@ enum class FootprintMode { Fixed, Adaptive };
 constexpr float kAdaptiveScale = 1.75f;
 constexpr float kMaxAdaptiveRadius = 64.0f;
 constexpr int kNeighbourSearch = 4;
+
+// The step of the landing lattice at landed texel (x, y) along grid offset (dx, dy): the central
+// difference of the neighbours' landing points, one-sided at an edge of the lit region (neighbours that
+// land on another face do not count); false when neither neighbour lands.
+bool lattice_step(const std::vector<FaceSplat>& landing, int grid, int x, int y, int dx, int dy, glm::vec2& step);
 
 // The Adaptive footprint radius of landed texel (x, y) (landing[y * grid + x] has a value > 0), at least
 // min_radius; false when no landed neighbour lies within kNeighbourSearch texels (then min_radius).

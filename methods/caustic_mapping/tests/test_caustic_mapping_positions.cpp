@@ -38,8 +38,8 @@ GBuffer irregular_coverage(int W, int H) {
     g.clear(W, H, DepthTest::Less, false);
     for (int y = 0; y < H; ++y)
         for (int x = 0; x < W; ++x) {
-            // A disk, a separate bar, a column band and a row left empty, lone texels (at the first and last
-    // columns and rows, and at a multiple of the scans' 16 texels from either end).
+            // A disk, a separate bar, a column band and a row left empty, lone texels (at the first and
+            // last columns and rows, and at a multiple of the scans' 16 texels from either end).
             const double dx = x - 0.4 * W, dy = y - 0.5 * H;
             const bool disk = dx * dx + dy * dy < 0.09 * W * H;
             const bool bar = x >= W - 12 && x < W - 4 && y > 3 && y < H - 10;

@@ -148,7 +148,7 @@ TEST(CausticMappingSplats, SphereSilhouetteSplatsHaveNeighbours) {
 // and long and sheared at 45 degrees (the largest footprint the clamp allows, 18.3 by 0.6 texels: its
 // expanded quadratic form has terms of 1e3 that cancel), narrow with rows longer than one chunk of the
 // normalising pass, narrow at the image's last texel (its rows' chunks reach past the image's end), and
-// wide and clipped by the image's right edge. The weights are computed in single precision
+// wide and clipped by the image's right and bottom edges (its last chunks too). The weights are computed in single precision
 // as a t^2 + c0 with both terms in [0, 6.1] (the cut-off q) and |t| within the chord: a few roundings of
 // 6e-8 relative each bound the error of q by about 3e-6, and the exponential's polynomial adds 1.2e-7;
 // a texel's value is a weight over a sum of such weights, so its relative error is below 8e-6, the
@@ -162,7 +162,7 @@ TEST(CausticMappingSplats, EllipticWeightsMatchTheirDefinition) {
         {{80.3f, 74.6f}, 1.0f, {167.3f, 166.9f, 167.3f}},     // long and thin at 45 degrees
         {{139.7f, 60.2f}, 2.5f, {30.0f, 0.4f, 0.3f}},         // narrow, rows of up to 38 texels (several chunks)
         {{157.5f, 146.5f}, 1.0f, {0.3f, 0.1f, 0.8f}},         // narrow, wholly inside, at the last row's end
-        {{157.0f, 80.0f}, 2.0f, {16.0f, 2.0f, 9.0f}},         // wide, clipped by the right edge (rows end there)
+        {{157.0f, 146.0f}, 2.0f, {16.0f, 2.0f, 9.0f}},        // wide, clipped by the right and bottom edges
     };
     for (const EllipticSplat& s : cases) {
         Image img(W, H);
@@ -208,9 +208,6 @@ TEST(CausticMappingSplats, EllipticWeightsMatchTheirDefinition) {
     }
 }
 
-// Many splats in one call (more than one group of kept weights, several bands, narrow ones whose
-// weights are kept and reused, wide, clipped and off-image ones recomputed) give exactly the image of
-// drawing them one at a time in the same order: every texel receives the same values in the same order.
 namespace {
 
 // count random splats over a W x H image and 10 texels around it: narrow, wide, clipped and off-image.
@@ -231,6 +228,9 @@ std::vector<EllipticSplat> random_splats(int count, int W, int H, std::uint32_t 
 
 }  // namespace
 
+// Many splats in one call (more than one group of kept weights, several bands, narrow ones whose
+// weights are kept and reused, wide, clipped and off-image ones recomputed) give exactly the image of
+// drawing them one at a time in the same order: every texel receives the same values in the same order.
 TEST(CausticMappingSplats, EllipticBatchEqualsOneAtATime) {
     const int W = 200, H = 120;
     const std::vector<EllipticSplat> splats = random_splats(700, W, H, 12345u);
@@ -261,6 +261,7 @@ TEST(CausticMappingSplats, EllipticSplatterReusedEqualsFresh) {
         EXPECT_EQ(sa.outside, sb.outside);
         EXPECT_EQ(sa.nonfinite, sb.nonfinite);
         EXPECT_EQ(sa.value_inside, sb.value_inside);
+        EXPECT_EQ(sa.value_outside, sb.value_outside);
         EXPECT_GT(sa.splatted, 100);
         for (int j = 0; j < d.H; ++j)
             for (int i = 0; i < d.W; ++i) ASSERT_EQ(a.at(i, j), b.at(i, j)) << i << "," << j;
@@ -337,4 +338,61 @@ TEST(CausticMappingSplats, EllipticSplatsFollowTheirRule) {
     EXPECT_EQ(next[1], got[1].size());
     EXPECT_GT(anisotropic, 1000);
     EXPECT_GT(fallback, 50);
+}
+
+// The drawing passes write whole chunks of 8 texels; the lanes past a row's end must leave their texels'
+// bits alone (not add 0, which would turn -0 into +0). On an image filled with -0, every texel whose
+// centre lies clearly outside the footprint's cut-off ellipse still holds -0 after the draw: rows ending
+// inside the image, at its right edge and at its last texel, narrow (kept weights) and wide (recomputed).
+TEST(CausticMappingSplats, EllipticTexelsOutsideTheFootprintKeepTheirBits) {
+    const int W = 64, H = 48;
+    const std::vector<EllipticSplat> cases = {
+        {{20.3f, 17.8f}, 2.0f, {0.3f, 0.1f, 0.8f}},      // narrow, rows of 1-3 texels
+        {{45.2f, 20.1f}, 1.0f, {30.0f, 0.4f, 0.3f}},     // narrow, rows up to 38 texels
+        {{61.5f, 46.5f}, 1.0f, {0.3f, 0.1f, 0.8f}},      // narrow, at the last texel
+        {{30.4f, 24.7f}, 1.5f, {9.0f, 4.0f, 6.0f}},      // wide, rows ending inside
+        {{61.0f, 44.0f}, 2.0f, {16.0f, 2.0f, 9.0f}},     // wide, clipped by the right and bottom edges
+    };
+    for (const EllipticSplat& s : cases) {
+        Image img(W, H);
+        std::fill(img.pixels.begin(), img.pixels.end(), -0.0f);
+        draw_elliptic({s}, img);
+        const double a = s.cov.x, b = s.cov.y, d = s.cov.z, det = a * d - b * b;
+        const double cut = 0.5 * kEllipticCutoff * kEllipticCutoff;
+        int outside = 0, drawn = 0;
+        for (int j = 0; j < H; ++j)
+            for (int i = 0; i < W; ++i) {
+                const double dx = i + 0.5 - s.pixel.x, dy = j + 0.5 - s.pixel.y;
+                const double q = 0.5 * (d * dx * dx - 2.0 * b * dx * dy + a * dy * dy) / det;
+                if (q <= cut + 1e-5) {
+                    drawn += img.at(i, j) > 0.0f;
+                    continue;
+                }
+                ++outside;
+                ASSERT_TRUE(img.at(i, j) == 0.0f && std::signbit(img.at(i, j))) << "texel " << i << "," << j;
+            }
+        EXPECT_GT(outside, 0);
+        EXPECT_GT(drawn, 0);
+    }
+}
+
+// Splats that cannot be drawn are refused and counted, and leave the image alone: a covariance with a
+// positive determinant that is not positive definite, a support reaching past 4096 texels (which would
+// take seconds to normalise), and a flux whose normalised value overflows float (a footprint whose one
+// texel centre has weight e^-4).
+TEST(CausticMappingSplats, EllipticRefusesWhatItCannotDraw) {
+    const std::vector<EllipticSplat> refused = {
+        {{10.0f, 10.0f}, 1.0f, {-1.0f, 0.0f, -2.0f}},
+        {{10.0f, 10.0f}, 1.0f, {1e9f, 0.0f, 1e9f}},
+        {{10.3f, 10.3f}, 3.0e38f, {0.01f, 0.0f, 0.01f}},
+    };
+    Image img(32, 32);
+    const SplatStats st = draw_elliptic(refused, img);
+    EXPECT_EQ(st.nonfinite, 3);
+    EXPECT_EQ(st.splatted, 0);
+    for (float v : img.pixels) ASSERT_EQ(v, 0.0f);
+    // The same flux on a footprint whose weights sum to more than 1 is drawn.
+    const SplatStats ok = draw_elliptic({{{10.5f, 10.5f}, 3.0e38f, {0.3f, 0.0f, 0.3f}}}, img);
+    EXPECT_EQ(ok.splatted, 1);
+    EXPECT_EQ(ok.nonfinite, 0);
 }
