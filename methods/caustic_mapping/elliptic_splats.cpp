@@ -214,69 +214,54 @@ CAUSTICS_AVX2_CLONES double footprint_sum_kept(const Print& p, glm::dvec2 c, Kep
     return ((lanes[0] + lanes[1]) + (lanes[2] + lanes[3])) + ((lanes[4] + lanes[5]) + (lanes[6] + lanes[7]));
 }
 
-// draw_rows for a splat whose weights were kept (wholly inside the image): whole chunks of kChunk texels,
-// then the row's last chunk, whose lanes past the row's end (weight 0) write back the value they read
+// Adds scale x weight(k) to texels k = 0 .. n - 1 of `row`, whose image row has `room` texels from row[0]:
+// whole chunks of kChunk texels, then the last chunk, whose lanes past n write back the value they read
 // (a select, not an addition of 0: a texel outside every footprint keeps its bits, -0 and NaN included),
-// where the image's row has room for the chunk; one texel at a time otherwise.
+// where the room allows; one texel at a time otherwise. Forced inline, so that each AVX2 clone that
+// calls it compiles its loops (and weight) for AVX2.
+template <class Weight>
+[[gnu::always_inline]] inline void add_to_row(float* __restrict row, int n, int room, float scale, Weight weight) {
+    const int whole = n / kChunk * kChunk;
+    for (int k0 = 0; k0 < whole; k0 += kChunk) {
+#pragma omp simd
+        for (int k = 0; k < kChunk; ++k) row[k0 + k] += scale * weight(k0 + k);
+    }
+    if (whole == n) return;
+    if (whole + kChunk <= room) {
+#pragma omp simd
+        for (int k = 0; k < kChunk; ++k) {
+            const float e = weight(whole + k), v = row[whole + k];
+            row[whole + k] = whole + k < n ? v + scale * e : v;
+        }
+        return;
+    }
+    for (int k = whole; k < n; ++k) row[k] += scale * weight(k);
+}
+
+// draw_rows for a splat whose weights were kept (wholly inside the image); the weights' padding to a
+// multiple of kChunk lets the last chunk read them whole.
 CAUSTICS_AVX2_CLONES void draw_kept_rows(const Print& p, const KeptWeights& kept, int j0, int j1, float scale,
                                          Image& target) {
     for (int j = j0; j <= j1; ++j) {
         const KeptRow& r = kept.rows[static_cast<std::size_t>(p.kept_rows + (j - p.y0))];
         if (r.n == 0) continue;   // its i0 may lie one past the image's last column
         const float* __restrict w = kept.weights.data() + r.w;
-        float* __restrict row = &target.at(r.i0, j);
-        const int n = r.n, whole = n / kChunk * kChunk;
-        for (int k0 = 0; k0 < whole; k0 += kChunk) {
-#pragma omp simd
-            for (int k = 0; k < kChunk; ++k) row[k0 + k] += scale * w[k0 + k];
-        }
-        if (whole == n) continue;
-        if (whole + kChunk <= target.width - r.i0) {
-#pragma omp simd
-            for (int k = 0; k < kChunk; ++k) {
-                const float v = row[whole + k];
-                row[whole + k] = whole + k < n ? v + scale * w[whole + k] : v;
-            }
-            continue;
-        }
-        for (int k = whole; k < n; ++k) row[k] += scale * w[k];
+        add_to_row(&target.at(r.i0, j), r.n, target.width - r.i0, scale, [w](int k) { return w[k]; });
     }
 }
 
-// Adds scale x weight to the texels of rows [j0, j1] (their columns already clipped to the image).
+// Adds scale x weight to the texels of rows [j0, j1] (their columns already clipped to the image). (The
+// wide footprints' rows hold 28 texels on average on the sphere scene: a loop over n ended each in a
+// scalar remainder of up to 7 exponentials, which add_to_row's last chunk replaces.)
 CAUSTICS_AVX2_CLONES void draw_rows(const Print& p, glm::dvec2 c, int j0, int j1, float scale, Image& target) {
     for (int j = j0; j <= j1; ++j) {
         const RowSpan r = row_span(p, c, j);
         if (r.i0 > r.i1) continue;
         const float a = r.a, c0 = r.c0, t0 = r.offset(r.i0);
-        const int n = r.i1 - r.i0 + 1;
-        float* __restrict row = &target.at(r.i0, j);
-        // Whole chunks of kChunk texels, then the rest as one more chunk whose lanes past the row's end
-        // write back what they read, as in draw_kept_rows. (The wide footprints' rows hold 28 texels on
-        // average on the sphere scene: a loop over n ended each in a scalar remainder of up to 7
-        // exponentials.)
-        const int whole = n / kChunk * kChunk;
-        for (int k0 = 0; k0 < whole; k0 += kChunk) {
-#pragma omp simd
-            for (int k = 0; k < kChunk; ++k) {
-                const float t = static_cast<float>(k0 + k) + t0;
-                row[k0 + k] += scale * neg_exp(a * t * t + c0);
-            }
-        }
-        if (whole == n) continue;
-        if (whole + kChunk <= target.width - r.i0) {
-#pragma omp simd
-            for (int k = 0; k < kChunk; ++k) {
-                const float t = static_cast<float>(whole + k) + t0;
-                const float e = neg_exp(a * t * t + c0), v = row[whole + k];
-                row[whole + k] = whole + k < n ? v + scale * e : v;
-            }
-            continue;
-        }
-        for (int k = whole; k < n; ++k) {
+        add_to_row(&target.at(r.i0, j), r.i1 - r.i0 + 1, target.width - r.i0, scale, [=](int k) {
             const float t = static_cast<float>(k) + t0;
-            row[k] += scale * neg_exp(a * t * t + c0);
-        }
+            return neg_exp(a * t * t + c0);
+        });
     }
 }
 
