@@ -123,9 +123,10 @@ bool same_bits(const Hit& a, const Hit& b) {
            bits(a.shading_normal, b.shading_normal);
 }
 
-// The reference's own rays (closest-hit and visibility) on a scene, through the single-ray and the
-// packet forms of the tracer: the same hits, bit for bit.
-void expect_batches_match_single_rays(const std::string& scene_file) {
+// The reference's own rays (closest-hit and visibility) on a scene, through the single-ray form of the
+// tracer and its batched form in `mode`: the same hits, bit for bit.
+void expect_batches_match_single_rays(const std::string& scene_file, QueryMode mode) {
+    SCOPED_TRACE("query mode " + std::to_string(static_cast<int>(mode)));
     const TracedScene ts(load_scene(scene_path(scene_file)));
     const CameraGBuffer gbuffer = build_camera_gbuffer(*ts.tracer, ts.scene.camera);
     ReferenceSettings settings;
@@ -145,7 +146,7 @@ void expect_batches_match_single_rays(const std::string& scene_file) {
     shadow_queries.push_back({{0.0, 0.0, 0.5}, {0.0, 0.0, -1.0}, 0.3, 0.2});
     ASSERT_GT(hit_queries.size(), 10000u) << scene_file;
     std::vector<Hit> hits(hit_queries.size());
-    ts.tracer->intersect(hit_queries.data(), hit_queries.size(), hits.data());
+    ts.tracer->intersect(hit_queries.data(), hit_queries.size(), hits.data(), mode);
     std::size_t valid = 0, mismatches = 0;
     for (std::size_t k = 0; k < hit_queries.size(); ++k) {
         const RayQuery& q = hit_queries[k];
@@ -156,7 +157,7 @@ void expect_batches_match_single_rays(const std::string& scene_file) {
     EXPECT_EQ(mismatches, 0u) << scene_file << ": " << hit_queries.size() << " closest-hit queries";
     EXPECT_GT(valid, hit_queries.size() / 4) << scene_file;
     std::vector<std::uint8_t> occluded(shadow_queries.size());
-    ts.tracer->occluded(shadow_queries.data(), shadow_queries.size(), occluded.data());
+    ts.tracer->occluded(shadow_queries.data(), shadow_queries.size(), occluded.data(), mode);
     std::size_t occluded_count = 0;
     mismatches = 0;
     for (std::size_t k = 0; k < shadow_queries.size(); ++k) {
@@ -173,7 +174,8 @@ void expect_batches_match_single_rays(const std::string& scene_file) {
 
 TEST(RayTracerBatches, SameHitsAsSingleRays) {
     for (const char* scene : {"pool.json", "sphere.json", "bunny.json", "sphere_fog.json"})
-        expect_batches_match_single_rays(scene);
+        for (QueryMode mode : {QueryMode::Single, QueryMode::Packet8, QueryMode::Packet16})
+            expect_batches_match_single_rays(scene, mode);
 }
 
 namespace {

@@ -1,7 +1,7 @@
 // Embree 3 ray tracer of one frame (DESIGN.md section 10: Embree 3.13, rtcIntersect1 with an
-// RTCIntersectContext; batches as rtcIntersect16 / rtcOccluded16 packets with a coherent context, which
-// replay the reference's recorded rays about 1.5-2x faster than single rays on pool, sphere and
-// sphere_fog: bench/bench_reference.cpp).
+// RTCIntersectContext). Batches go to Embree in the caller's QueryMode: single rays, or 8- or 16-ray
+// packets with a coherent context; every mode completes its hits in the same code, so all give the
+// same bits.
 //
 // Conventions we own rather than borrow from Embree:
 // - The outward geometric normal is normalize((v1 - v0) x (v2 - v0)), counter-clockwise seen from
@@ -16,8 +16,10 @@
 #include <caustics/frame/ray_tracer.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <limits>
 #include <mutex>
 #include <stdexcept>
@@ -130,6 +132,74 @@ struct RawHit {
     float u, v, ng_x, ng_y, ng_z, tfar;
 };
 
+// One query as Embree's single ray, t in [tmin, tmax] in single precision. tmin already includes the
+// tracer's minimum.
+RTCRay single_ray(const glm::dvec3& origin, const glm::dvec3& dir, double tmin, double tmax) {
+    RTCRay ray;
+    ray.org_x = static_cast<float>(origin.x);
+    ray.org_y = static_cast<float>(origin.y);
+    ray.org_z = static_cast<float>(origin.z);
+    ray.dir_x = static_cast<float>(dir.x);
+    ray.dir_y = static_cast<float>(dir.y);
+    ray.dir_z = static_cast<float>(dir.z);
+    ray.tnear = static_cast<float>(tmin);
+    ray.tfar = embree_tfar(tmax);
+    ray.time = 0.0f;
+    ray.mask = 0xFFFFFFFFu;
+    ray.id = 0;
+    ray.flags = 0;
+    return ray;
+}
+
+// Embree's closest hit of one ray; geom_id is RTC_INVALID_GEOMETRY_ID where it hits nothing.
+RawHit closest_single(RTCScene scene, RTCIntersectContext* context, const glm::dvec3& origin, const glm::dvec3& dir,
+                      double tmin, double tmax) {
+    RTCRayHit rh;
+    rh.ray = single_ray(origin, dir, tmin, tmax);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(scene, context, &rh);
+    return {rh.hit.geomID, rh.hit.primID, rh.hit.u, rh.hit.v, rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z, rh.ray.tfar};
+}
+
+// Lane k of a packet (RTCRay8 or RTCRay16): the query's segment [tmin, tmax] in single precision.
+template <class RayW>
+void set_lane(RayW& p, int k, const RayQuery& q, double tmin) {
+    p.org_x[k] = static_cast<float>(q.origin.x);
+    p.org_y[k] = static_cast<float>(q.origin.y);
+    p.org_z[k] = static_cast<float>(q.origin.z);
+    p.dir_x[k] = static_cast<float>(q.dir.x);
+    p.dir_y[k] = static_cast<float>(q.dir.y);
+    p.dir_z[k] = static_cast<float>(q.dir.z);
+    p.tnear[k] = static_cast<float>(tmin);
+    p.tfar[k] = embree_tfar(q.tmax);
+    p.time[k] = 0.0f;
+    p.mask[k] = 0xFFFFFFFFu;
+    p.id[k] = 0;
+    p.flags[k] = 0;
+}
+
+// Embree's packet types and queries by width.
+template <int W>
+struct Packet;
+template <>
+struct Packet<8> {
+    using Ray = RTCRay8;
+    using RayHit = RTCRayHit8;
+    static void intersect(const int* valid, RTCScene s, RTCIntersectContext* c, RayHit* p) { rtcIntersect8(valid, s, c, p); }
+    static void occluded(const int* valid, RTCScene s, RTCIntersectContext* c, Ray* p) { rtcOccluded8(valid, s, c, p); }
+};
+template <>
+struct Packet<16> {
+    using Ray = RTCRay16;
+    using RayHit = RTCRayHit16;
+    static void intersect(const int* valid, RTCScene s, RTCIntersectContext* c, RayHit* p) { rtcIntersect16(valid, s, c, p); }
+    static void occluded(const int* valid, RTCScene s, RTCIntersectContext* c, Ray* p) { rtcOccluded16(valid, s, c, p); }
+};
+
+// Queries a batch completes together, whatever the mode: their shading-normal loads overlap.
+constexpr int kGroup = 16;
+
 
 }  // namespace
 
@@ -153,6 +223,20 @@ struct RayTracer::Impl {
     // The Hit of one ray from Embree's raw answer: one code path for single and packet queries, so
     // that both give the same bits.
     Hit complete(const glm::dvec3& origin, const glm::dvec3& dir, const RawHit& raw) const;
+    // The query's tmin as Embree gets it (at least min_tmin); throws on a ray Embree would abort on.
+    double checked_tmin(const RayQuery& q, const char* what) const {
+        const double tmin = std::max(q.tmin, min_tmin);
+        if (!valid_ray(q.origin, q.dir, tmin, q.tmax)) [[unlikely]]
+            invalid_ray(what, q.origin, q.dir, tmin, q.tmax);
+        return tmin;
+    }
+    // Embree's answers for queries[0, count), count <= kGroup, in `mode`.
+    void raw_hits(const RayQuery* queries, int count, QueryMode mode, RawHit* raw) const;
+    template <int W>
+    void raw_hits_packets(const RayQuery* queries, int count, RawHit* raw) const;
+    void visibility(const RayQuery* queries, int count, QueryMode mode, std::uint8_t* occluded) const;
+    template <int W>
+    void visibility_packets(const RayQuery* queries, int count, std::uint8_t* occluded) const;
 
     ~Impl() {
         if (scene) rtcReleaseScene(scene);
@@ -230,30 +314,12 @@ RayTracer::~RayTracer() = default;
 void* RayTracer::embree_scene() const { return impl_->scene; }
 
 Hit RayTracer::intersect(const glm::dvec3& origin, const glm::dvec3& dir, double tmin, double tmax) const {
-    tmin = std::max(tmin, impl_->min_tmin);
-    if (!valid_ray(origin, dir, tmin, tmax)) [[unlikely]]
-        invalid_ray("intersect", origin, dir, tmin, tmax);
+    tmin = impl_->checked_tmin({origin, dir, tmin, tmax}, "intersect");
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
-    RTCRayHit rh;
-    rh.ray.org_x = static_cast<float>(origin.x);
-    rh.ray.org_y = static_cast<float>(origin.y);
-    rh.ray.org_z = static_cast<float>(origin.z);
-    rh.ray.dir_x = static_cast<float>(dir.x);
-    rh.ray.dir_y = static_cast<float>(dir.y);
-    rh.ray.dir_z = static_cast<float>(dir.z);
-    rh.ray.tnear = static_cast<float>(tmin);
-    rh.ray.tfar = embree_tfar(tmax);
-    rh.ray.time = 0.0f;
-    rh.ray.mask = 0xFFFFFFFFu;
-    rh.ray.id = 0;
-    rh.ray.flags = 0;
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(impl_->scene, &context, &rh);
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return Hit{};
-    return impl_->complete(origin, dir,
-                        {rh.hit.geomID, rh.hit.primID, rh.hit.u, rh.hit.v, rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z, rh.ray.tfar});
+    const RawHit raw = closest_single(impl_->scene, &context, origin, dir, tmin, tmax);
+    if (raw.geom_id == RTC_INVALID_GEOMETRY_ID) return Hit{};
+    return impl_->complete(origin, dir, raw);
 }
 
 Hit RayTracer::Impl::complete(const glm::dvec3& origin, const glm::dvec3& dir, const RawHit& raw) const {
@@ -309,113 +375,112 @@ Hit RayTracer::Impl::complete(const glm::dvec3& origin, const glm::dvec3& dir, c
 }
 
 bool RayTracer::occluded(const glm::dvec3& origin, const glm::dvec3& dir, double tmin, double tmax) const {
-    tmin = std::max(tmin, impl_->min_tmin);
-    if (!(tmax > tmin)) return false;
-    if (!valid_ray(origin, dir, tmin, tmax)) [[unlikely]]
-        invalid_ray("occluded", origin, dir, tmin, tmax);
+    std::uint8_t result = 0;
+    impl_->visibility(std::array<RayQuery, 1>{RayQuery{origin, dir, tmin, tmax}}.data(), 1, QueryMode::Single, &result);
+    return result != 0;
+}
+
+void RayTracer::Impl::raw_hits(const RayQuery* queries, int count, QueryMode mode, RawHit* raw) const {
+    if (mode == QueryMode::Packet8) {
+        raw_hits_packets<8>(queries, count, raw);
+        if (count > 8) raw_hits_packets<8>(queries + 8, count - 8, raw + 8);
+        return;
+    }
+    if (mode == QueryMode::Packet16) return raw_hits_packets<16>(queries, count, raw);
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
-    RTCRay ray;
-    ray.org_x = static_cast<float>(origin.x);
-    ray.org_y = static_cast<float>(origin.y);
-    ray.org_z = static_cast<float>(origin.z);
-    ray.dir_x = static_cast<float>(dir.x);
-    ray.dir_y = static_cast<float>(dir.y);
-    ray.dir_z = static_cast<float>(dir.z);
-    ray.tnear = static_cast<float>(tmin);
-    ray.tfar = embree_tfar(tmax);
-    ray.time = 0.0f;
-    ray.mask = 0xFFFFFFFFu;
-    ray.id = 0;
-    ray.flags = 0;
-    rtcOccluded1(impl_->scene, &context, &ray);
-    // Embree sets tfar to -inf when the ray is occluded.
-    return ray.tfar < 0.0f;
+    for (int k = 0; k < count; ++k) {
+        const RayQuery& q = queries[k];
+        raw[k] = closest_single(scene, &context, q.origin, q.dir, checked_tmin(q, "intersect"), q.tmax);
+    }
 }
 
-namespace {
-
-// Lane k of a 16-ray packet: the query's segment [tmin, tmax] in single precision.
-void set_lane(RTCRay16& p, int k, const RayQuery& q, double tmin) {
-    p.org_x[k] = static_cast<float>(q.origin.x);
-    p.org_y[k] = static_cast<float>(q.origin.y);
-    p.org_z[k] = static_cast<float>(q.origin.z);
-    p.dir_x[k] = static_cast<float>(q.dir.x);
-    p.dir_y[k] = static_cast<float>(q.dir.y);
-    p.dir_z[k] = static_cast<float>(q.dir.z);
-    p.tnear[k] = static_cast<float>(tmin);
-    p.tfar[k] = embree_tfar(q.tmax);
-    p.time[k] = 0.0f;
-    p.mask[k] = 0xFFFFFFFFu;
-    p.id[k] = 0;
-    p.flags[k] = 0;
-}
-
-}  // namespace
-
-void RayTracer::intersect(const RayQuery* queries, std::size_t n, Hit* hits) const {
+template <int W>
+void RayTracer::Impl::raw_hits_packets(const RayQuery* queries, int count, RawHit* raw) const {
+    count = std::min(count, W);
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-    for (std::size_t first = 0; first < n; first += 16) {
-        const int count = static_cast<int>(std::min<std::size_t>(16, n - first));
-        alignas(64) int valid[16];
-        alignas(64) RTCRayHit16 p{};   // inactive lanes hold zeros, never stale values
-        for (int k = 0; k < 16; ++k) {
-            valid[k] = k < count ? -1 : 0;
-            if (k >= count) continue;
-            const RayQuery& q = queries[first + k];
-            const double tmin = std::max(q.tmin, impl_->min_tmin);
-            if (!valid_ray(q.origin, q.dir, tmin, q.tmax)) [[unlikely]]
-                invalid_ray("intersect", q.origin, q.dir, tmin, q.tmax);
-            set_lane(p.ray, k, q, tmin);
-            p.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
-            p.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
-        }
-        rtcIntersect16(valid, impl_->scene, &context, &p);
-        // The packet's shading-normal records first, so that their cache misses overlap.
+    alignas(64) int valid[W];
+    alignas(64) typename Packet<W>::RayHit p;
+    if (count < W) std::memset(&p, 0, sizeof p);   // inactive lanes hold zeros, never stale values
+    for (int k = 0; k < W; ++k) {
+        valid[k] = k < count ? -1 : 0;
+        if (k >= count) continue;
+        set_lane(p.ray, k, queries[k], checked_tmin(queries[k], "intersect"));
+        p.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+        p.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+    }
+    Packet<W>::intersect(valid, scene, &context, &p);
+    for (int k = 0; k < count; ++k)
+        raw[k] = {p.hit.geomID[k], p.hit.primID[k], p.hit.u[k], p.hit.v[k], p.hit.Ng_x[k], p.hit.Ng_y[k], p.hit.Ng_z[k], p.ray.tfar[k]};
+}
+
+void RayTracer::Impl::visibility(const RayQuery* queries, int count, QueryMode mode, std::uint8_t* occluded) const {
+    if (mode == QueryMode::Packet8) {
+        visibility_packets<8>(queries, count, occluded);
+        if (count > 8) visibility_packets<8>(queries + 8, count - 8, occluded + 8);
+        return;
+    }
+    if (mode == QueryMode::Packet16) return visibility_packets<16>(queries, count, occluded);
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    for (int k = 0; k < count; ++k) {
+        const RayQuery& q = queries[k];
+        occluded[k] = 0;
+        if (!(q.tmax > std::max(q.tmin, min_tmin))) continue;   // an empty segment is not occluded
+        RTCRay ray = single_ray(q.origin, q.dir, checked_tmin(q, "occluded"), q.tmax);
+        rtcOccluded1(scene, &context, &ray);
+        occluded[k] = ray.tfar < 0.0f ? 1 : 0;   // Embree sets tfar to -inf when the ray is occluded
+    }
+}
+
+template <int W>
+void RayTracer::Impl::visibility_packets(const RayQuery* queries, int count, std::uint8_t* occluded) const {
+    count = std::min(count, W);
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    alignas(64) int valid[W];
+    alignas(64) typename Packet<W>::Ray p;
+    std::memset(&p, 0, sizeof p);   // lanes left out (inactive or empty) hold zeros
+    for (int k = 0; k < W; ++k) {
+        valid[k] = 0;
+        if (k >= count) continue;
+        const RayQuery& q = queries[k];
+        if (!(q.tmax > std::max(q.tmin, min_tmin))) continue;   // an empty segment is not occluded
+        valid[k] = -1;
+        set_lane(p, k, q, checked_tmin(q, "occluded"));
+    }
+    Packet<W>::occluded(valid, scene, &context, &p);
+    for (int k = 0; k < count; ++k) occluded[k] = valid[k] != 0 && p.tfar[k] < 0.0f ? 1 : 0;
+}
+
+void RayTracer::intersect(const RayQuery* queries, std::size_t n, Hit* hits, QueryMode mode) const {
+    RawHit raw[kGroup];
+    for (std::size_t first = 0; first < n; first += kGroup) {
+        const int count = static_cast<int>(std::min<std::size_t>(kGroup, n - first));
+        impl_->raw_hits(queries + first, count, mode, raw);
+        // The group's shading-normal records first, so that their cache misses overlap.
         for (int k = 0; k < count; ++k) {
-            if (p.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) continue;
-            const std::vector<Impl::CornerNormals>& normals = impl_->geometries[p.hit.geomID[k]].corner_normals;
+            if (raw[k].geom_id == RTC_INVALID_GEOMETRY_ID) continue;
+            const std::vector<Impl::CornerNormals>& normals = impl_->geometries[raw[k].geom_id].corner_normals;
             if (normals.empty()) continue;
-            const char* record = reinterpret_cast<const char*>(&normals[p.hit.primID[k]]);
+            const char* record = reinterpret_cast<const char*>(&normals[raw[k].prim_id]);
             __builtin_prefetch(record);
             __builtin_prefetch(record + sizeof(Impl::CornerNormals) - 1);
         }
         for (int k = 0; k < count; ++k) {
             const RayQuery& q = queries[first + k];
-            hits[first + k] = p.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID
-                                  ? Hit{}
-                                  : impl_->complete(q.origin, q.dir,
-                                                    {p.hit.geomID[k], p.hit.primID[k], p.hit.u[k], p.hit.v[k],
-                                                     p.hit.Ng_x[k], p.hit.Ng_y[k], p.hit.Ng_z[k], p.ray.tfar[k]});
+            hits[first + k] = raw[k].geom_id == RTC_INVALID_GEOMETRY_ID ? Hit{} : impl_->complete(q.origin, q.dir, raw[k]);
         }
     }
 }
 
-void RayTracer::occluded(const RayQuery* queries, std::size_t n, std::uint8_t* occluded) const {
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-    for (std::size_t first = 0; first < n; first += 16) {
-        const int count = static_cast<int>(std::min<std::size_t>(16, n - first));
-        alignas(64) int valid[16];
-        alignas(64) RTCRay16 p{};
-        for (int k = 0; k < 16; ++k) {
-            valid[k] = 0;
-            if (k >= count) continue;
-            const RayQuery& q = queries[first + k];
-            const double tmin = std::max(q.tmin, impl_->min_tmin);
-            if (!(q.tmax > tmin)) continue;   // an empty segment is not occluded (as in the single form)
-            if (!valid_ray(q.origin, q.dir, tmin, q.tmax)) [[unlikely]]
-                invalid_ray("occluded", q.origin, q.dir, tmin, q.tmax);
-            valid[k] = -1;
-            set_lane(p, k, q, tmin);
-        }
-        rtcOccluded16(valid, impl_->scene, &context, &p);
-        // Embree sets tfar to -inf where a ray is occluded.
-        for (int k = 0; k < count; ++k) occluded[first + k] = valid[k] != 0 && p.tfar[k] < 0.0f ? 1 : 0;
-    }
+void RayTracer::occluded(const RayQuery* queries, std::size_t n, std::uint8_t* occluded, QueryMode mode) const {
+    for (std::size_t first = 0; first < n; first += kGroup)
+        impl_->visibility(queries + first, static_cast<int>(std::min<std::size_t>(kGroup, n - first)), mode,
+                          occluded + first);
 }
 
 }  // namespace caustics

@@ -37,6 +37,14 @@ struct RayQuery {
     double tmax = 1e30;
 };
 
+// How a batch of queries goes to Embree: one ray at a time (rtcIntersect1 / rtcOccluded1) or as
+// packets of 8 or 16 rays with a coherent context. Which is fastest depends on the rays' coherence and
+// the scene, and changes from run to run where they are close (bench/bench_reference.cpp: on `sphere`
+// 16-ray packets ran 1.4x faster than single rays; on `bunny`, whose refracted rays scatter over a
+// 69k-triangle mesh, single rays ran 1.5x faster than packets).
+enum class QueryMode : std::uint8_t { Single, Packet8, Packet16 };
+constexpr int kQueryModes = 3;
+
 class RayTracer {
 public:
     explicit RayTracer(const FrameGeometry& frame);
@@ -50,12 +58,12 @@ public:
     // True if anything lies on the open segment. Thread-safe.
     bool occluded(const glm::dvec3& origin, const glm::dvec3& dir, double tmin, double tmax) const;
 
-    // Batches of n queries, traced as Embree ray packets of 16 with a coherent context: much faster
-    // than one query at a time where consecutive queries are coherent (the reference's photon batches).
-    // hits[k] / occluded[k] are what the single-ray forms return for queries[k], bit for bit
-    // (tests/test_reference_bits.cpp). Thread-safe.
-    void intersect(const RayQuery* queries, std::size_t n, Hit* hits) const;
-    void occluded(const RayQuery* queries, std::size_t n, std::uint8_t* occluded) const;
+    // Batches of n queries. hits[k] / occluded[k] are what the single-ray forms return for queries[k],
+    // bit for bit, in every QueryMode (tests/test_reference_bits.cpp); the mode only sets the speed.
+    // Thread-safe.
+    void intersect(const RayQuery* queries, std::size_t n, Hit* hits, QueryMode mode = QueryMode::Packet16) const;
+    void occluded(const RayQuery* queries, std::size_t n, std::uint8_t* occluded,
+                  QueryMode mode = QueryMode::Packet16) const;
 
     const FrameGeometry& frame() const { return *frame_; }
 

@@ -1,10 +1,12 @@
 // Wavefront tracing of the reference's photons (issue 18): a chunk's photons advance together, one
-// segment per wave. Each wave sends the live photons' next rays to Embree as one batch of 16-ray
-// packets (RayTracer's batched intersect), steps every photon on its hit (reference_transport.cpp),
-// then resolves the wave's visibility queries (camera deposits, camera_volume points) as another batch.
-// Photons of a batch are ordered along a Z-order curve of their emission samples (photon_source.hpp),
-// so the rays of one packet start close together and stay coherent over the first bounces: packets
-// traverse the BVH about 1.5-2x faster than single rays on pool (bench/bench_reference.cpp).
+// segment per wave. Each wave sends the live photons' next rays to Embree as one batch (RayTracer's
+// batched intersect), steps every photon on its hit (reference_transport.cpp), then resolves the wave's
+// visibility queries (camera deposits, camera_volume points) as another batch. Photons of a batch are
+// ordered along a Z-order curve of their emission samples (photon_source.hpp), so the rays of one
+// packet start close together and stay coherent over the first bounces, where packets traverse the BVH
+// up to 1.5-2x faster than single rays; after refractions through a large mesh single rays can be
+// faster (bench/bench_reference.cpp). Each batch goes to Embree in the mode this thread has timed
+// fastest for its kind (query_mode_chooser.hpp); every mode gives the same hits.
 //
 // Same bits as tracing one photon after another: every photon reads the same sample values and takes
 // the same path (the batched queries return exactly the single-ray hits, tests/test_reference_bits.cpp);
@@ -39,7 +41,7 @@ void Transport::trace_wave(std::uint32_t replica, std::uint64_t first, const std
             ledger.emitted += s.photons[k].w;
             s.active[k] = static_cast<std::uint32_t>(k);
         }
-        while (!s.active.empty()) {
+        for (int segment = 0; !s.active.empty(); ++segment) {
             const std::size_t live = s.active.size();
             s.queries.resize(live);
             s.hits.resize(live);
@@ -47,7 +49,8 @@ void Transport::trace_wave(std::uint32_t replica, std::uint64_t first, const std
                 const PhotonState& p = s.photons[s.active[j]];
                 s.queries[j] = {p.origin, p.dir, 1e-6, 1e30};
             }
-            tracer->intersect(s.queries.data(), live, s.hits.data());
+            s.modes.run(QueryModeChooser::hit_kind(segment), live,
+                        [&](QueryMode mode) { tracer->intersect(s.queries.data(), live, s.hits.data(), mode); });
             s.shadows.clear();
             s.next.clear();
             for (std::size_t j = 0; j < live; ++j)
@@ -56,7 +59,9 @@ void Transport::trace_wave(std::uint32_t replica, std::uint64_t first, const std
                 s.shadow_rays.resize(s.shadows.size());
                 s.occluded.resize(s.shadows.size());
                 for (std::size_t j = 0; j < s.shadows.size(); ++j) s.shadow_rays[j] = s.shadows[j].ray;
-                tracer->occluded(s.shadow_rays.data(), s.shadow_rays.size(), s.occluded.data());
+                s.modes.run(QueryModeChooser::kVisibility, s.shadow_rays.size(), [&](QueryMode mode) {
+                    tracer->occluded(s.shadow_rays.data(), s.shadow_rays.size(), s.occluded.data(), mode);
+                });
                 for (std::size_t j = 0; j < s.shadows.size(); ++j)
                     if (!s.occluded[j]) apply_shadow(s.shadows[j]);
             }

@@ -23,6 +23,8 @@
 #include <caustics/reference/reference_rays.hpp>
 #include <caustics/scene/scene.hpp>
 
+#include <caustics/frame/query_mode_chooser.hpp>
+
 namespace caustics::detail {
 
 // One photon's normalised weight q (<= 1) becomes an integer of at most 2^30: 1e9 photons in one bin of
@@ -136,6 +138,7 @@ struct WaveScratch {
     std::vector<LedgerEvent> events, sorted;
     std::vector<std::uint32_t> event_start;
     std::vector<SamplerSeeds> seeds;
+    QueryModeChooser modes;   // this thread's timings of its batches, kept over all its chunks
 };
 
 // Everything one photon needs, shared read-only by all threads.
