@@ -16,7 +16,7 @@
 #include <caustics/frame/ray_tracer.hpp>
 
 #include <algorithm>
-#include <array>
+#include <cassert>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -131,6 +131,7 @@ struct RawHit {
     unsigned geom_id, prim_id;
     float u, v, ng_x, ng_y, ng_z, tfar;
 };
+constexpr RawHit kMiss{RTC_INVALID_GEOMETRY_ID, 0u, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
 
 // One query as Embree's single ray, t in [tmin, tmax] in single precision. tmin already includes the
 // tracer's minimum.
@@ -159,7 +160,16 @@ RawHit closest_single(RTCScene scene, RTCIntersectContext* context, const glm::d
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(scene, context, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return kMiss;   // the hit's other fields are not set
     return {rh.hit.geomID, rh.hit.primID, rh.hit.u, rh.hit.v, rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z, rh.ray.tfar};
+}
+
+// True if Embree finds anything on the ray's segment (it sets tfar to -inf then).
+bool occluded_single(RTCScene scene, RTCIntersectContext* context, const glm::dvec3& origin, const glm::dvec3& dir,
+                     double tmin, double tmax) {
+    RTCRay ray = single_ray(origin, dir, tmin, tmax);
+    rtcOccluded1(scene, context, &ray);
+    return ray.tfar < 0.0f;
 }
 
 // Lane k of a packet (RTCRay8 or RTCRay16): the query's segment [tmin, tmax] in single precision.
@@ -223,20 +233,18 @@ struct RayTracer::Impl {
     // The Hit of one ray from Embree's raw answer: one code path for single and packet queries, so
     // that both give the same bits.
     Hit complete(const glm::dvec3& origin, const glm::dvec3& dir, const RawHit& raw) const;
-    // The query's tmin as Embree gets it (at least min_tmin); throws on a ray Embree would abort on.
-    double checked_tmin(const RayQuery& q, const char* what) const {
-        const double tmin = std::max(q.tmin, min_tmin);
+    // Throws on a ray Embree would abort on; tmin is the query's as Embree gets it (at least min_tmin).
+    void check(const RayQuery& q, double tmin, const char* what) const {
         if (!valid_ray(q.origin, q.dir, tmin, q.tmax)) [[unlikely]]
             invalid_ray(what, q.origin, q.dir, tmin, q.tmax);
-        return tmin;
     }
     // Embree's answers for queries[0, count), count <= kGroup, in `mode`.
     void raw_hits(const RayQuery* queries, int count, QueryMode mode, RawHit* raw) const;
     template <int W>
-    void raw_hits_packets(const RayQuery* queries, int count, RawHit* raw) const;
+    void raw_hits_packet(const RayQuery* queries, int count, RawHit* raw) const;
     void visibility(const RayQuery* queries, int count, QueryMode mode, std::uint8_t* occluded) const;
     template <int W>
-    void visibility_packets(const RayQuery* queries, int count, std::uint8_t* occluded) const;
+    void visibility_packet(const RayQuery* queries, int count, std::uint8_t* occluded) const;
 
     ~Impl() {
         if (scene) rtcReleaseScene(scene);
@@ -314,7 +322,8 @@ RayTracer::~RayTracer() = default;
 void* RayTracer::embree_scene() const { return impl_->scene; }
 
 Hit RayTracer::intersect(const glm::dvec3& origin, const glm::dvec3& dir, double tmin, double tmax) const {
-    tmin = impl_->checked_tmin({origin, dir, tmin, tmax}, "intersect");
+    tmin = std::max(tmin, impl_->min_tmin);
+    impl_->check({origin, dir, tmin, tmax}, tmin, "intersect");
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     const RawHit raw = closest_single(impl_->scene, &context, origin, dir, tmin, tmax);
@@ -375,29 +384,51 @@ Hit RayTracer::Impl::complete(const glm::dvec3& origin, const glm::dvec3& dir, c
 }
 
 bool RayTracer::occluded(const glm::dvec3& origin, const glm::dvec3& dir, double tmin, double tmax) const {
-    std::uint8_t result = 0;
-    impl_->visibility(std::array<RayQuery, 1>{RayQuery{origin, dir, tmin, tmax}}.data(), 1, QueryMode::Single, &result);
-    return result != 0;
+    tmin = std::max(tmin, impl_->min_tmin);
+    if (!(tmax > tmin)) return false;   // an empty segment is not occluded
+    impl_->check({origin, dir, tmin, tmax}, tmin, "occluded");
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    return occluded_single(impl_->scene, &context, origin, dir, tmin, tmax);
 }
 
-void RayTracer::Impl::raw_hits(const RayQuery* queries, int count, QueryMode mode, RawHit* raw) const {
-    if (mode == QueryMode::Packet8) {
-        raw_hits_packets<8>(queries, count, raw);
-        if (count > 8) raw_hits_packets<8>(queries + 8, count - 8, raw + 8);
-        return;
+namespace {
+
+// Runs packet.template operator()<W>(offset, n) over a group of `count` <= kGroup queries in `mode`'s
+// packets (W = 8 or 16); false for single rays, which the caller runs itself.
+template <class PerWidth>
+bool in_packets(QueryMode mode, int count, PerWidth&& packet) {
+    if (mode == QueryMode::Packet16) {
+        packet.template operator()<16>(0, count);
+    } else if (mode == QueryMode::Packet8) {
+        packet.template operator()<8>(0, std::min(count, 8));
+        if (count > 8) packet.template operator()<8>(8, count - 8);
+    } else {
+        return false;
     }
-    if (mode == QueryMode::Packet16) return raw_hits_packets<16>(queries, count, raw);
+    return true;
+}
+
+}  // namespace
+
+void RayTracer::Impl::raw_hits(const RayQuery* queries, int count, QueryMode mode, RawHit* raw) const {
+    const bool done = in_packets(mode, count, [&]<int W>(int offset, int n) {
+        raw_hits_packet<W>(queries + offset, n, raw + offset);
+    });
+    if (done) return;
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     for (int k = 0; k < count; ++k) {
         const RayQuery& q = queries[k];
-        raw[k] = closest_single(scene, &context, q.origin, q.dir, checked_tmin(q, "intersect"), q.tmax);
+        const double tmin = std::max(q.tmin, min_tmin);
+        check(q, tmin, "intersect");
+        raw[k] = closest_single(scene, &context, q.origin, q.dir, tmin, q.tmax);
     }
 }
 
 template <int W>
-void RayTracer::Impl::raw_hits_packets(const RayQuery* queries, int count, RawHit* raw) const {
-    count = std::min(count, W);
+void RayTracer::Impl::raw_hits_packet(const RayQuery* queries, int count, RawHit* raw) const {
+    assert(count >= 1 && count <= W);
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
@@ -407,37 +438,41 @@ void RayTracer::Impl::raw_hits_packets(const RayQuery* queries, int count, RawHi
     for (int k = 0; k < W; ++k) {
         valid[k] = k < count ? -1 : 0;
         if (k >= count) continue;
-        set_lane(p.ray, k, queries[k], checked_tmin(queries[k], "intersect"));
+        const double tmin = std::max(queries[k].tmin, min_tmin);
+        check(queries[k], tmin, "intersect");
+        set_lane(p.ray, k, queries[k], tmin);
         p.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
         p.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
     }
     Packet<W>::intersect(valid, scene, &context, &p);
+    // A missed lane's other hit fields are not set.
     for (int k = 0; k < count; ++k)
-        raw[k] = {p.hit.geomID[k], p.hit.primID[k], p.hit.u[k], p.hit.v[k], p.hit.Ng_x[k], p.hit.Ng_y[k], p.hit.Ng_z[k], p.ray.tfar[k]};
+        raw[k] = p.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID
+                     ? kMiss
+                     : RawHit{p.hit.geomID[k], p.hit.primID[k], p.hit.u[k], p.hit.v[k], p.hit.Ng_x[k], p.hit.Ng_y[k],
+                              p.hit.Ng_z[k], p.ray.tfar[k]};
 }
 
 void RayTracer::Impl::visibility(const RayQuery* queries, int count, QueryMode mode, std::uint8_t* occluded) const {
-    if (mode == QueryMode::Packet8) {
-        visibility_packets<8>(queries, count, occluded);
-        if (count > 8) visibility_packets<8>(queries + 8, count - 8, occluded + 8);
-        return;
-    }
-    if (mode == QueryMode::Packet16) return visibility_packets<16>(queries, count, occluded);
+    const bool done = in_packets(mode, count, [&]<int W>(int offset, int n) {
+        visibility_packet<W>(queries + offset, n, occluded + offset);
+    });
+    if (done) return;
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     for (int k = 0; k < count; ++k) {
         const RayQuery& q = queries[k];
+        const double tmin = std::max(q.tmin, min_tmin);
         occluded[k] = 0;
-        if (!(q.tmax > std::max(q.tmin, min_tmin))) continue;   // an empty segment is not occluded
-        RTCRay ray = single_ray(q.origin, q.dir, checked_tmin(q, "occluded"), q.tmax);
-        rtcOccluded1(scene, &context, &ray);
-        occluded[k] = ray.tfar < 0.0f ? 1 : 0;   // Embree sets tfar to -inf when the ray is occluded
+        if (!(q.tmax > tmin)) continue;   // an empty segment is not occluded
+        check(q, tmin, "occluded");
+        occluded[k] = occluded_single(scene, &context, q.origin, q.dir, tmin, q.tmax) ? 1 : 0;
     }
 }
 
 template <int W>
-void RayTracer::Impl::visibility_packets(const RayQuery* queries, int count, std::uint8_t* occluded) const {
-    count = std::min(count, W);
+void RayTracer::Impl::visibility_packet(const RayQuery* queries, int count, std::uint8_t* occluded) const {
+    assert(count >= 1 && count <= W);
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
@@ -448,11 +483,14 @@ void RayTracer::Impl::visibility_packets(const RayQuery* queries, int count, std
         valid[k] = 0;
         if (k >= count) continue;
         const RayQuery& q = queries[k];
-        if (!(q.tmax > std::max(q.tmin, min_tmin))) continue;   // an empty segment is not occluded
+        const double tmin = std::max(q.tmin, min_tmin);
+        if (!(q.tmax > tmin)) continue;   // an empty segment is not occluded
+        check(q, tmin, "occluded");
         valid[k] = -1;
-        set_lane(p, k, q, checked_tmin(q, "occluded"));
+        set_lane(p, k, q, tmin);
     }
     Packet<W>::occluded(valid, scene, &context, &p);
+    // Embree sets tfar to -inf where a ray is occluded.
     for (int k = 0; k < count; ++k) occluded[k] = valid[k] != 0 && p.tfar[k] < 0.0f ? 1 : 0;
 }
 

@@ -93,6 +93,7 @@ Transport make_transport(const RayTracer& tracer, const ReceiverChart& chart, co
     transport.fresnel = scene.fresnel;
     transport.seed = settings.seed;
     transport.sampler = settings.sampler;
+    transport.query_mode = settings.query_mode;
     transport.outside_ior = scene.medium.present ? scene.medium.ior : 1.0;
     transport.scale = 0.0;
     for (const Light& light : scene.lights) {

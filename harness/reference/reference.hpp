@@ -14,11 +14,13 @@
 // more photons (each replica continues its own sequence) to the same bits as one computed at once.
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <caustics/frame/camera.hpp>
 #include <caustics/frame/frame.hpp>
+#include <caustics/frame/ray_tracer.hpp>
 #include <caustics/util/hash.hpp>
 #include <caustics/util/image.hpp>
 #include <caustics/util/huge_pages.hpp>
@@ -61,6 +63,10 @@ struct ReferenceSettings {
     int threads = 0;            // 0 = all
     bool camera_view = true;    // also produce the camera view (one visibility ray per deposit)
     bool progress = true;       // progress bar on stderr when it runs longer than a second
+    // How the rays go to Embree. Empty (the default): each thread times its batches and uses the fastest
+    // mode (query_mode_chooser.hpp). Set: every batch in that mode, for tests and measurements. The
+    // sums are the same bits either way (tests/test_reference_bits.cpp), so it is not part of the cache key.
+    std::optional<QueryMode> query_mode{};
 
     static constexpr int kDefaultReplicas = 8;
     static constexpr std::uint64_t kDefaultPhotonCap = 2'000'000'000;

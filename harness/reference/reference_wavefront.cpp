@@ -4,9 +4,10 @@
 // visibility queries (camera deposits, camera_volume points) as another batch. Photons of a batch are
 // ordered along a Z-order curve of their emission samples (photon_source.hpp), so the rays of one
 // packet start close together and stay coherent over the first bounces, where packets traverse the BVH
-// up to 1.5-2x faster than single rays; after refractions through a large mesh single rays can be
-// faster (bench/bench_reference.cpp). Each batch goes to Embree in the mode this thread has timed
-// fastest for its kind (query_mode_chooser.hpp); every mode gives the same hits.
+// often faster than single rays; after refractions through a large mesh single rays can be faster
+// (bench/bench_reference.cpp). Each batch goes to Embree in the mode this thread has timed fastest for
+// its kind (query_mode_chooser.hpp), or in ReferenceSettings::query_mode where that is set; the modes
+// gave the same hits on every ray checked (tests/test_reference_bits.cpp).
 //
 // Same bits as tracing one photon after another: every photon reads the same sample values and takes
 // the same path (the batched queries return exactly the single-ray hits, tests/test_reference_bits.cpp);
@@ -49,7 +50,7 @@ void Transport::trace_wave(std::uint32_t replica, std::uint64_t first, const std
                 const PhotonState& p = s.photons[s.active[j]];
                 s.queries[j] = {p.origin, p.dir, 1e-6, 1e30};
             }
-            s.modes.run(QueryModeChooser::hit_kind(segment), live,
+            s.modes.run(QueryModeChooser::hit_kind(segment), live, query_mode,
                         [&](QueryMode mode) { tracer->intersect(s.queries.data(), live, s.hits.data(), mode); });
             s.shadows.clear();
             s.next.clear();
@@ -59,7 +60,7 @@ void Transport::trace_wave(std::uint32_t replica, std::uint64_t first, const std
                 s.shadow_rays.resize(s.shadows.size());
                 s.occluded.resize(s.shadows.size());
                 for (std::size_t j = 0; j < s.shadows.size(); ++j) s.shadow_rays[j] = s.shadows[j].ray;
-                s.modes.run(QueryModeChooser::kVisibility, s.shadow_rays.size(), [&](QueryMode mode) {
+                s.modes.run(QueryModeChooser::kVisibility, s.shadow_rays.size(), query_mode, [&](QueryMode mode) {
                     tracer->occluded(s.shadow_rays.data(), s.shadow_rays.size(), s.occluded.data(), mode);
                 });
                 for (std::size_t j = 0; j < s.shadows.size(); ++j)

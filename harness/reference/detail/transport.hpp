@@ -8,6 +8,7 @@
 #include <atomic>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -159,6 +160,7 @@ struct Transport {
     bool fresnel = false;
     std::uint64_t seed = 1;
     SamplerKind sampler = SamplerKind::Sobol;
+    std::optional<QueryMode> query_mode;   // ReferenceSettings::query_mode
     // Media (reference_volume.cpp): media[object + 1] is medium_at(scene, object), [0] the outside.
     std::vector<MediumCoefficients> media;
     // camera_volume: measured when `volume` (the scene scatters and the camera view is asked).
