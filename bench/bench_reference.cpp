@@ -14,6 +14,8 @@
 //                       the ray queries it actually makes)
 // Rates and ratios are medians over the timed iterations, after one untimed round of everything (the
 // process's first reference maps its buffers fresh; later ones reuse them, util/huge_pages.hpp).
+// BM_ReferenceQueryMode/scene/mode:{0 single, 1 packet8, 2 packet16, 3 timed choice}: compute_reference
+//                       without the camera view, its query mode pinned or chosen (the default).
 // BM_Reference/scene/camera: compute_reference alone (for profiles: perf record -g ... --benchmark_filter=BM_Reference/).
 //
 //   build/release/bench/bench_reference [--benchmark_filter=...]
@@ -272,8 +274,32 @@ void BM_Reference(benchmark::State& state) {
     state.SetLabel(kScenes.at(static_cast<std::size_t>(state.range(0))));
 }
 
+// The reference with its query mode pinned (mode 0 single rays, 1 8-ray packets, 2 16-ray packets) or
+// chosen by timing (mode 3, the default): how the choice compares with the best fixed mode.
+void BM_ReferenceQueryMode(benchmark::State& state) {
+    BenchScene& bs = BenchScene::get(static_cast<std::size_t>(state.range(0)));
+    ReferenceSettings settings = settings_for(false);
+    if (state.range(1) < kQueryModes) settings.query_mode = static_cast<QueryMode>(state.range(1));
+    benchmark::DoNotOptimize(compute_reference(*bs.tracer, *bs.chart, nullptr, settings));   // untimed
+    std::vector<double> seconds;
+    for (auto _ : state) {
+        const auto start = std::chrono::steady_clock::now();
+        benchmark::DoNotOptimize(compute_reference(*bs.tracer, *bs.chart, nullptr, settings));
+        seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+        state.SetIterationTime(seconds.back());
+    }
+    state.counters["photons_per_s"] = static_cast<double>(settings.photons) / median(seconds);
+    state.SetLabel(kScenes.at(static_cast<std::size_t>(state.range(0))));
+}
+
 }  // namespace
 
+BENCHMARK(BM_ReferenceQueryMode)
+    ->ArgNames({"scene", "mode"})
+    ->ArgsProduct({{0, 1, 2, 3}, {0, 1, 2, 3}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseManualTime()
+    ->Iterations(5);
 BENCHMARK(BM_ReferenceVsEmbree)
     ->ArgNames({"scene", "camera"})
     ->ArgsProduct({{0, 1, 2, 3}, {0, 1}})
