@@ -321,14 +321,13 @@ RayTracer::~RayTracer() = default;
 
 void* RayTracer::embree_scene() const { return impl_->scene; }
 
+// The single-ray forms are batches of one in QueryMode::Single: one place for the segment's rules
+// (the tracer's minimum tmin, empty segments, rays Embree would abort on).
 Hit RayTracer::intersect(const glm::dvec3& origin, const glm::dvec3& dir, double tmin, double tmax) const {
-    tmin = std::max(tmin, impl_->min_tmin);
-    impl_->check({origin, dir, tmin, tmax}, tmin, "intersect");
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    const RawHit raw = closest_single(impl_->scene, &context, origin, dir, tmin, tmax);
-    if (raw.geom_id == RTC_INVALID_GEOMETRY_ID) return Hit{};
-    return impl_->complete(origin, dir, raw);
+    const RayQuery query{origin, dir, tmin, tmax};
+    RawHit raw;
+    impl_->raw_hits(&query, 1, QueryMode::Single, &raw);
+    return raw.geom_id == RTC_INVALID_GEOMETRY_ID ? Hit{} : impl_->complete(origin, dir, raw);
 }
 
 Hit RayTracer::Impl::complete(const glm::dvec3& origin, const glm::dvec3& dir, const RawHit& raw) const {
@@ -384,12 +383,10 @@ Hit RayTracer::Impl::complete(const glm::dvec3& origin, const glm::dvec3& dir, c
 }
 
 bool RayTracer::occluded(const glm::dvec3& origin, const glm::dvec3& dir, double tmin, double tmax) const {
-    tmin = std::max(tmin, impl_->min_tmin);
-    if (!(tmax > tmin)) return false;   // an empty segment is not occluded
-    impl_->check({origin, dir, tmin, tmax}, tmin, "occluded");
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    return occluded_single(impl_->scene, &context, origin, dir, tmin, tmax);
+    const RayQuery query{origin, dir, tmin, tmax};
+    std::uint8_t result = 0;
+    impl_->visibility(&query, 1, QueryMode::Single, &result);
+    return result != 0;
 }
 
 namespace {

@@ -15,6 +15,7 @@
 
 #include <caustics/frame/camera.hpp>
 #include <caustics/frame/frame.hpp>
+#include <caustics/frame/query_mode_chooser.hpp>
 #include <caustics/frame/ray_tracer.hpp>
 #include <caustics/frame/receiver_chart.hpp>
 #include <caustics/util/huge_pages.hpp>
@@ -23,8 +24,6 @@
 #include <caustics/reference/reference.hpp>
 #include <caustics/reference/reference_rays.hpp>
 #include <caustics/scene/scene.hpp>
-
-#include <caustics/frame/query_mode_chooser.hpp>
 
 namespace caustics::detail {
 
