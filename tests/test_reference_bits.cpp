@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <numbers>
 #include <optional>
 #include <string>
 #include <vector>
@@ -326,4 +327,67 @@ TEST(PhotonBatchOrder, StableSortByLightAndCell) {
             ++checked;
         }
     EXPECT_EQ(checked, 4u);
+}
+
+// A wave's emissions in one call (Emitter::sample_many: the libm calls in one loop, the arithmetic in
+// another that vectorises) are the one-photon formula's bits, written out here with glm as the emitter
+// had it: over chunk boundaries (64) and partial chunks, for a cone and a full sphere around an oblique
+// axis. Every direction is a unit vector inside the cone, and a directional light's photons start on
+// its rectangle along its direction.
+TEST(EmitterBits, BatchedEmissionsEqualTheOnePhotonFormula) {
+    std::uint64_t state = 99;
+    auto uniform = [&] {
+        state = state * 6364136223846793005ull + 1442695040888963407ull;
+        return static_cast<double>(state >> 11) * 0x1.0p-53;
+    };
+    std::size_t checked = 0, mismatches = 0, outside = 0;
+    for (double cos_max : {0.3, -1.0}) {
+        Emitter e;
+        e.type = LightType::Point;
+        e.position = {0.5, -2.0, 3.0};
+        e.direction = glm::normalize(glm::dvec3(0.3, 0.4, -0.8));
+        orthonormal_basis(e.direction, e.axis_a, e.axis_b);
+        e.cos_max = cos_max;
+        for (std::size_t n : {std::size_t{1}, std::size_t{64}, std::size_t{150}}) {
+            std::vector<glm::dvec2> u(n);
+            for (glm::dvec2& v : u) v = {uniform(), uniform()};
+            u[0] = {0.0, 0.0};   // the cone's axis
+            if (n > 1) u[1] = {1.0, 0.999};   // its rim
+            std::vector<glm::dvec3> origins(n), dirs(n);
+            e.sample_many(u.data(), n, origins.data(), dirs.data());
+            for (std::size_t k = 0; k < n; ++k) {
+                const double cos_t = 1.0 - u[k].x * (1.0 - cos_max);
+                const double sin_t = std::sqrt(std::max(0.0, 1.0 - cos_t * cos_t));
+                const double phi = 2.0 * std::numbers::pi * u[k].y;
+                const glm::dvec3 expected =
+                    glm::normalize(cos_t * e.direction + sin_t * (std::cos(phi) * e.axis_a + std::sin(phi) * e.axis_b));
+                mismatches += (dirs[k] == expected && origins[k] == e.position) ? 0 : 1;
+                outside += std::abs(glm::length(dirs[k]) - 1.0) < 1e-15 && glm::dot(dirs[k], e.direction) >= cos_max - 1e-12 ? 0 : 1;
+                ++checked;
+            }
+        }
+    }
+    Emitter d;
+    d.type = LightType::Directional;
+    d.direction = glm::normalize(glm::dvec3(-0.2, 0.1, -1.0));
+    orthonormal_basis(d.direction, d.axis_a, d.axis_b);
+    d.corner = {-1.0, -1.0, 4.0};
+    d.extent_a = 2.0, d.extent_b = 3.0;
+    std::vector<glm::dvec2> u(70);
+    for (glm::dvec2& v : u) v = {uniform(), uniform()};
+    std::vector<glm::dvec3> origins(u.size()), dirs(u.size());
+    d.sample_many(u.data(), u.size(), origins.data(), dirs.data());
+    for (std::size_t k = 0; k < u.size(); ++k) {
+        const glm::dvec3 offset = origins[k] - d.corner;
+        mismatches += dirs[k] == d.direction ? 0 : 1;
+        outside += std::abs(glm::dot(offset, d.direction)) < 1e-12 && glm::dot(offset, d.axis_a) >= -1e-12 &&
+                           glm::dot(offset, d.axis_a) <= 2.0 + 1e-12 && glm::dot(offset, d.axis_b) >= -1e-12 &&
+                           glm::dot(offset, d.axis_b) <= 3.0 + 1e-12
+                       ? 0
+                       : 1;
+        ++checked;
+    }
+    EXPECT_EQ(checked, 2u * (1u + 64u + 150u) + 70u);
+    EXPECT_EQ(mismatches, 0u);
+    EXPECT_EQ(outside, 0u);
 }

@@ -3,8 +3,8 @@
 // lights, and the order in which each batch of photons is traced (the sample values themselves come
 // from photon_sampler.hpp). Split from reference.cpp; everything here is deterministic.
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
-#include <numbers>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -29,17 +29,14 @@ struct Emitter {
     double power = 0.0;                // total flux this light sends through the sampled domain [W]
     double flux_per_photon = 0.0;
 
+    // Photon k of n leaves from origins[k] along dirs[k] for its emission sample values u[k] (dimensions
+    // 0 and 1): a directional light's rectangle; a point light's cone, uniform in solid angle. A point
+    // light's cos and sin of phi run in a loop of their own (libm calls), the rest in one that runs four
+    // photons per AVX2 vector with the bits of one photon at a time.
+    void sample_many(const glm::dvec2* u, std::size_t n, glm::dvec3* origins, glm::dvec3* dirs) const;
     void sample(double u1, double u2, glm::dvec3& origin, glm::dvec3& dir) const {
-        if (type == LightType::Directional) {
-            origin = corner + (u1 * extent_a) * axis_a + (u2 * extent_b) * axis_b;
-            dir = direction;
-        } else {
-            const double cos_t = 1.0 - u1 * (1.0 - cos_max);
-            const double sin_t = std::sqrt(std::max(0.0, 1.0 - cos_t * cos_t));
-            const double phi = 2.0 * std::numbers::pi * u2;
-            origin = position;
-            dir = glm::normalize(cos_t * direction + sin_t * (std::cos(phi) * axis_a + std::sin(phi) * axis_b));
-        }
+        const glm::dvec2 u(u1, u2);
+        sample_many(&u, 1, &origin, &dir);
     }
 };
 

@@ -61,12 +61,13 @@ void Transport::seeds_of(std::uint32_t replica, std::vector<SamplerSeeds>& seeds
         seeds[l] = PhotonSampler::seeds(sampler, seed + 0x51ED270B27D5A3C1ull * l, replica);
 }
 
-PhotonState Transport::start(const SamplerSeeds* seeds, std::uint64_t i, const glm::dvec2& emission,
-                             std::uint32_t slot) const {
+PhotonState Transport::start(const SamplerSeeds* seeds, std::uint64_t i, const glm::dvec3& origin,
+                             const glm::dvec3& dir, std::uint32_t slot) const {
     PhotonState p;
-    const std::size_t light = emitters.size() == 1 ? 0 : static_cast<std::size_t>(i % emitters.size());
+    const std::size_t light = light_of(i);
     p.rng = PhotonSampler(seeds[light], emitters.size() == 1 ? i : i / emitters.size());
-    emitters[light].sample(emission.x, emission.y, p.origin, p.dir);
+    p.origin = origin;
+    p.dir = dir;
     // Dimension 2 is the dispersion sample, read where a dispersive material is hit (step).
     // Dimensions 3, 4, ... in the order of use: each Fresnel choice, and each segment after a specular
     // event in a scattering medium (its camera_volume scattering point, drawn whether or not the view
@@ -169,7 +170,9 @@ void Transport::trace(const SamplerSeeds* seeds, std::uint64_t i, const glm::dve
                       Accumulators& acc, RayRecorder& log) const {
     std::vector<LedgerEvent> events;
     std::vector<ShadowQuery> shadows;
-    PhotonState p = start(seeds, i, emission, 0);
+    glm::dvec3 origin, dir;
+    emitters[light_of(i)].sample(emission.x, emission.y, origin, dir);
+    PhotonState p = start(seeds, i, origin, dir, 0);
     events.push_back({0, &FluxLedger::emitted, p.w});
     for (bool alive = true; alive;) {
         log.ray(p.origin, p.dir, 1e-6, 1e30, false);

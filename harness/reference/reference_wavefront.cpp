@@ -36,9 +36,19 @@ void Transport::trace_wave(std::uint32_t replica, std::uint64_t first, const std
         s.events.clear();
         s.photons.resize(count);
         s.active.resize(count);
+        s.origins.resize(count);
+        s.dirs.resize(count);
+        // The wave's emissions in one call where all its photons share a light (their libm calls and
+        // their arithmetic in loops of their own, Emitter::sample_many).
+        if (emitters.size() == 1) {
+            emitters[0].sample_many(emission + w0, count, s.origins.data(), s.dirs.data());
+        } else {
+            for (std::size_t k = 0; k < count; ++k)
+                emitters[light_of(first + order[w0 + k])].sample_many(emission + w0 + k, 1, &s.origins[k], &s.dirs[k]);
+        }
         for (std::size_t k = 0; k < count; ++k) {
             const std::uint32_t offset = order[w0 + k];
-            s.photons[k] = start(s.seeds.data(), first + offset, emission[w0 + k], static_cast<std::uint32_t>(k));
+            s.photons[k] = start(s.seeds.data(), first + offset, s.origins[k], s.dirs[k], static_cast<std::uint32_t>(k));
             ledger.emitted += s.photons[k].w;
             s.active[k] = static_cast<std::uint32_t>(k);
         }

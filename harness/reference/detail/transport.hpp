@@ -129,6 +129,7 @@ struct BatchOrder {
 // Per thread: the wave's buffers, kept from chunk to chunk.
 struct WaveScratch {
     std::vector<PhotonState> photons;
+    std::vector<glm::dvec3> origins, dirs;   // the wave's photons as they leave their lights
     std::vector<std::uint32_t> active, next;
     std::vector<RayQuery> queries;
     std::vector<Hit> hits;
@@ -173,9 +174,14 @@ struct Transport {
     // The batch's photon order (photon_source.hpp) and, in that order, each photon's sample values of
     // dimensions 0 and 1, which the order is made from and its emission reads.
     void batch_order(std::uint32_t replica, std::uint64_t first, std::uint64_t last, BatchOrder& batch) const;
-    // Photon i of a replica as it leaves its light (emission: its dimensions 0 and 1; seeds: seeds_of
-    // its replica). The caller books its emitted weight w.
-    PhotonState start(const SamplerSeeds* seeds, std::uint64_t i, const glm::dvec2& emission, std::uint32_t slot) const;
+    // The light photon i belongs to (i mod L).
+    std::size_t light_of(std::uint64_t i) const {
+        return emitters.size() == 1 ? 0 : static_cast<std::size_t>(i % emitters.size());
+    }
+    // Photon i of a replica as it leaves its light from `origin` along `dir` (Emitter::sample of its
+    // dimensions 0 and 1; seeds: seeds_of its replica). The caller books its emitted weight w.
+    PhotonState start(const SamplerSeeds* seeds, std::uint64_t i, const glm::dvec3& origin, const glm::dvec3& dir,
+                      std::uint32_t slot) const;
     // Everything one segment does after its closest-hit query `hit`: extinction, the camera_volume
     // point, the deposit, or the next direction. Media's ledger additions go to `ledger`, visibility
     // queries to `shadows` (the caller resolves both). False when the photon's path has ended: then
