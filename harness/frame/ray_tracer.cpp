@@ -231,8 +231,9 @@ struct RayTracer::Impl {
     double ng_sign = 1.0;                   // embree_ng_sign(), cached
 
     // The Hit of one ray from Embree's raw answer: one code path for single and packet queries, so
-    // that both give the same bits.
-    Hit complete(const glm::dvec3& origin, const glm::dvec3& dir, const RawHit& raw) const;
+    // that both give the same bits. Written into `out` field by field: a returned Hit was copied in
+    // 16-byte pieces from a temporary just written in 8-byte ones, a store-forwarding stall per hit.
+    void complete(const glm::dvec3& origin, const glm::dvec3& dir, const RawHit& raw, Hit& out) const;
     // Throws on a ray Embree would abort on; tmin is the query's as Embree gets it (at least min_tmin).
     void check(const RayQuery& q, double tmin, const char* what) const {
         if (!valid_ray(q.origin, q.dir, tmin, q.tmax)) [[unlikely]]
@@ -327,11 +328,12 @@ Hit RayTracer::intersect(const glm::dvec3& origin, const glm::dvec3& dir, double
     const RayQuery query{origin, dir, tmin, tmax};
     RawHit raw;
     impl_->raw_hits(&query, 1, QueryMode::Single, &raw);
-    return raw.geom_id == RTC_INVALID_GEOMETRY_ID ? Hit{} : impl_->complete(origin, dir, raw);
+    Hit hit;
+    if (raw.geom_id != RTC_INVALID_GEOMETRY_ID) impl_->complete(origin, dir, raw, hit);
+    return hit;
 }
 
-Hit RayTracer::Impl::complete(const glm::dvec3& origin, const glm::dvec3& dir, const RawHit& raw) const {
-    // Hit is built once from its final values (a default-constructed Hit would be zeroed first).
+void RayTracer::Impl::complete(const glm::dvec3& origin, const glm::dvec3& dir, const RawHit& raw, Hit& out) const {
     const GeometryInfo& info = geometries[raw.geom_id];
     const ObjectInstance& inst = *info.instance;
     double t = raw.tfar;
@@ -379,7 +381,12 @@ Hit RayTracer::Impl::complete(const glm::dvec3& origin, const glm::dvec3& dir, c
         // Shading normals face the geometric normal's (outward) side.
         if (glm::dot(shading_normal, geometric_normal) < 0.0) shading_normal = -shading_normal;
     }
-    return Hit{true, info.object, t, position, geometric_normal, shading_normal};
+    out.valid = true;
+    out.object = info.object;
+    out.t = t;
+    out.position = position;
+    out.geometric_normal = geometric_normal;
+    out.shading_normal = shading_normal;
 }
 
 bool RayTracer::occluded(const glm::dvec3& origin, const glm::dvec3& dir, double tmin, double tmax) const {
@@ -507,7 +514,8 @@ void RayTracer::intersect(const RayQuery* queries, std::size_t n, Hit* hits, Que
         }
         for (int k = 0; k < count; ++k) {
             const RayQuery& q = queries[first + k];
-            hits[first + k] = raw[k].geom_id == RTC_INVALID_GEOMETRY_ID ? Hit{} : impl_->complete(q.origin, q.dir, raw[k]);
+            if (raw[k].geom_id == RTC_INVALID_GEOMETRY_ID) hits[first + k] = Hit{};
+            else impl_->complete(q.origin, q.dir, raw[k], hits[first + k]);
         }
     }
 }

@@ -61,22 +61,23 @@ void Transport::seeds_of(std::uint32_t replica, std::vector<SamplerSeeds>& seeds
         seeds[l] = PhotonSampler::seeds(sampler, seed + 0x51ED270B27D5A3C1ull * l, replica);
 }
 
-PhotonState Transport::start(const SamplerSeeds* seeds, std::uint64_t i, const glm::dvec3& origin,
-                             const glm::dvec3& dir, std::uint32_t slot) const {
-    PhotonState p;
+void Transport::start(const SamplerSeeds* seeds, std::uint64_t i, const glm::dvec3& origin, const glm::dvec3& dir,
+                      std::uint32_t slot, PhotonState& p) const {
     const std::size_t light = light_of(i);
     p.rng = PhotonSampler(seeds[light], emitters.size() == 1 ? i : i / emitters.size());
     p.origin = origin;
     p.dir = dir;
+    p.w = start_weight[light];
     // Dimension 2 is the dispersion sample, read where a dispersive material is hit (step).
     // Dimensions 3, 4, ... in the order of use: each Fresnel choice, and each segment after a specular
     // event in a scattering medium (its camera_volume scattering point, drawn whether or not the view
     // is measured so that the other views do not depend on it). Scenes without scattering read exactly
     // the dimensions they read before media existed.
     p.next_dim = 3;
-    p.w = start_weight[light];
+    p.depth = 0;
+    p.inside = -1;
     p.slot = slot;
-    return p;
+    p.end = nullptr;
 }
 
 bool Transport::step(PhotonState& p, const Hit& hit, std::vector<LedgerEvent>& ledger, Accumulators& acc,
@@ -172,7 +173,8 @@ void Transport::trace(const SamplerSeeds* seeds, std::uint64_t i, const glm::dve
     std::vector<ShadowQuery> shadows;
     glm::dvec3 origin, dir;
     emitters[light_of(i)].sample(emission.x, emission.y, origin, dir);
-    PhotonState p = start(seeds, i, origin, dir, 0);
+    PhotonState p;
+    start(seeds, i, origin, dir, 0, p);
     events.push_back({0, &FluxLedger::emitted, p.w});
     for (bool alive = true; alive;) {
         log.ray(p.origin, p.dir, 1e-6, 1e30, false);

@@ -48,7 +48,7 @@ void Transport::trace_wave(std::uint32_t replica, std::uint64_t first, const std
         }
         for (std::size_t k = 0; k < count; ++k) {
             const std::uint32_t offset = order[w0 + k];
-            s.photons[k] = start(s.seeds.data(), first + offset, s.origins[k], s.dirs[k], static_cast<std::uint32_t>(k));
+            start(s.seeds.data(), first + offset, s.origins[k], s.dirs[k], static_cast<std::uint32_t>(k), s.photons[k]);
             ledger.emitted += s.photons[k].w;
             s.active[k] = static_cast<std::uint32_t>(k);
         }

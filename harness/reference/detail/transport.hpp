@@ -84,7 +84,7 @@ struct PixelInfo {
     int object;
 };
 
-// One photon in flight: what its next segment needs.
+// One photon in flight: what its next segment needs. Transport::start sets every field.
 struct PhotonState {
     PhotonSampler rng;
     glm::dvec3 origin{0.0}, dir{0.0};
@@ -179,9 +179,11 @@ struct Transport {
         return emitters.size() == 1 ? 0 : static_cast<std::size_t>(i % emitters.size());
     }
     // Photon i of a replica as it leaves its light from `origin` along `dir` (Emitter::sample of its
-    // dimensions 0 and 1; seeds: seeds_of its replica). The caller books its emitted weight w.
-    PhotonState start(const SamplerSeeds* seeds, std::uint64_t i, const glm::dvec3& origin, const glm::dvec3& dir,
-                      std::uint32_t slot) const;
+    // dimensions 0 and 1; seeds: seeds_of its replica), written into every field of p in place (a
+    // returned copy was read back across its field-by-field stores, a store-forwarding stall per photon).
+    // The caller books its emitted weight w.
+    void start(const SamplerSeeds* seeds, std::uint64_t i, const glm::dvec3& origin, const glm::dvec3& dir,
+               std::uint32_t slot, PhotonState& p) const;
     // Everything one segment does after its closest-hit query `hit`: extinction, the camera_volume
     // point, the deposit, or the next direction. Media's ledger additions go to `ledger`, visibility
     // queries to `shadows` (the caller resolves both). False when the photon's path has ended: then
