@@ -29,6 +29,7 @@
 #include <embree3/rtcore.h>
 
 #include <caustics/frame/ray_offset.hpp>
+#include <caustics/util/huge_pages.hpp>
 
 namespace caustics {
 namespace {
@@ -224,7 +225,9 @@ struct RayTracer::Impl {
     struct GeometryInfo {
         int object = -1;
         const ObjectInstance* instance = nullptr;
-        std::vector<CornerNormals> corner_normals;   // per triangle; empty: no vertex normals (or not a mesh)
+        // Per triangle; empty: no vertex normals (or not a mesh). On huge pages where large: hits read
+        // it at random, and with 4 KiB pages most of those reads also missed the TLB.
+        std::vector<CornerNormals, HugePageAllocator<CornerNormals>> corner_normals;
     };
     std::vector<GeometryInfo> geometries;   // by Embree geomID
     double min_tmin = 0.0;                  // self-intersection guard scaled to the scene size
@@ -506,7 +509,7 @@ void RayTracer::intersect(const RayQuery* queries, std::size_t n, Hit* hits, Que
         // The group's shading-normal records first, so that their cache misses overlap.
         for (int k = 0; k < count; ++k) {
             if (raw[k].geom_id == RTC_INVALID_GEOMETRY_ID) continue;
-            const std::vector<Impl::CornerNormals>& normals = impl_->geometries[raw[k].geom_id].corner_normals;
+            const auto& normals = impl_->geometries[raw[k].geom_id].corner_normals;
             if (normals.empty()) continue;
             const char* record = reinterpret_cast<const char*>(&normals[raw[k].prim_id]);
             __builtin_prefetch(record);
