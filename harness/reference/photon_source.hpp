@@ -2,7 +2,6 @@
 // Where the reference's photons come from (DESIGN.md section 5): the emitters of directional and point
 // lights, and the order in which each batch of photons is traced (the sample values themselves come
 // from photon_sampler.hpp). Split from reference.cpp; everything here is deterministic.
-#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
