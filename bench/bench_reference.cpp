@@ -12,10 +12,18 @@
 //   ratio               anchor replay time / reference time for the same photons. Goal >= 0.8.
 //   ratio_single        single replay time / reference time (the share of the reference's time spent in
 //                       the ray queries it actually makes)
+//   tracer_over_anchor  the same rays through RayTracer's batches (packing, Embree, hit completion) in its
+//                       fastest QueryMode, over the anchor: what the tracer layer alone costs
+//   generation_over_anchor  the same photons' generation alone (sampler, Z order, emitter), over the anchor
+//   ceiling_tracer, ceiling_tracer_generation  anchor / (those stages): the ratio if everything else
+//                       (transport, waves, deposits) cost nothing; below 0.8, those stages alone miss it
 // Rates and ratios are medians over the timed iterations, after one untimed round of everything (the
 // process's first reference maps its buffers fresh; later ones reuse them, util/huge_pages.hpp).
 // BM_ReferenceQueryMode/scene/mode:{0 single, 1 packet8, 2 packet16, 3 timed choice}: compute_reference
 //                       without the camera view, its query mode pinned or chosen (the default).
+// BM_PhotonGeneration/scene: the generation alone, with each stage's share of its thread time.
+// BM_TracerBatches/scene/mode:{0 single, 1 packet8, 2 packet16}: RayTracer's batches alone on the recorded
+//                       rays; over_embree: their time over bare Embree's in the same mode, same rays.
 // BM_Reference/scene/camera: compute_reference alone (for profiles: perf record -g ... --benchmark_filter=BM_Reference/).
 //
 //   build/release/bench/bench_reference [--benchmark_filter=...]
@@ -39,6 +47,8 @@
 #include <caustics/frame/frame.hpp>
 #include <caustics/frame/ray_tracer.hpp>
 #include <caustics/frame/receiver_chart.hpp>
+#include <caustics/reference/photon_sampler.hpp>
+#include <caustics/reference/photon_source.hpp>
 #include <caustics/reference/reference.hpp>
 #include <caustics/reference/reference_rays.hpp>
 #include <caustics/scene/scene.hpp>
@@ -208,6 +218,110 @@ double replay(RTCScene scene, const std::vector<RecordedRay>& rays, Mode mode) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+// The tracer's own batches (RayTracer::intersect / occluded: packing, Embree, hit completion) on the same
+// rays as the anchor's grouped replay, in `mode`, as batches of at most 512 queries of one kind like the
+// reference's waves (their queries and hits stay in L2); returns seconds. What they cost beyond the
+// anchor is the reference's packing and hit completion, measured apart from its transport.
+double replay_tracer(const RayTracer& tracer, const std::vector<RecordedRay>& rays, QueryMode mode) {
+    constexpr std::size_t kWave = 512;
+    const auto start = std::chrono::steady_clock::now();
+    const std::size_t blocks = (rays.size() + kBlock - 1) / kBlock;
+    const std::size_t hits = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, blocks, 1), std::size_t{0},
+        [&](const tbb::blocked_range<std::size_t>& range, std::size_t count) {
+            std::vector<RayQuery> queries;
+            std::vector<Hit> out(kWave);
+            std::vector<std::uint8_t> occluded(kWave);
+            queries.reserve(kWave);
+            bool shadow = false;
+            auto flush = [&] {
+                if (shadow) {
+                    tracer.occluded(queries.data(), queries.size(), occluded.data(), mode);
+                    for (std::size_t k = 0; k < queries.size(); ++k) count += occluded[k];
+                } else {
+                    tracer.intersect(queries.data(), queries.size(), out.data(), mode);
+                    for (std::size_t k = 0; k < queries.size(); ++k) count += out[k].valid ? 1 : 0;
+                }
+                queries.clear();
+            };
+            for (std::size_t b = range.begin(); b < range.end(); ++b)
+                for (std::size_t i = b * kBlock; i < std::min(rays.size(), (b + 1) * kBlock); ++i) {
+                    const RecordedRay& r = rays[i];
+                    if (!queries.empty() && (r.shadow != shadow || queries.size() == kWave)) flush();
+                    shadow = r.shadow;
+                    queries.push_back({{r.origin[0], r.origin[1], r.origin[2]}, {r.dir[0], r.dir[1], r.dir[2]}, r.tnear, r.tfar});
+                }
+            if (!queries.empty()) flush();
+            return count;
+        },
+        [](std::size_t a, std::size_t b) { return a + b; });
+    benchmark::DoNotOptimize(hits);
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// The photons' generation alone, as compute_reference makes it for the same photons (each replica's
+// batches of 65,536: the scrambled Sobol' emission samples, the batch's Z order, the samples gathered in
+// that order, the light's origins and directions in waves of 512); returns seconds. One light only.
+// stages (if given): each stage's thread seconds summed over the batches, in that order.
+using GenerationStages = std::array<double, 4>;
+constexpr std::array<const char*, 4> kGenerationStages = {"sampler", "order", "gather", "emitter"};
+
+double generate_photons(const Emitter& emitter, const ReferenceSettings& settings, GenerationStages* stages = nullptr) {
+    using Clock = std::chrono::steady_clock;
+    constexpr std::uint64_t kBatch = 65536;
+    constexpr std::size_t kWave = 512;
+    const auto replicas = static_cast<std::uint64_t>(settings.replicas);
+    const std::uint64_t per_replica = (settings.photons + replicas - 1) / replicas;
+    const std::uint64_t per_replica_batches = (per_replica + kBatch - 1) / kBatch;
+    std::vector<GenerationStages> batch_stages(per_replica_batches * replicas);
+    const auto start = Clock::now();
+    const double sum = tbb::parallel_reduce(
+        tbb::blocked_range<std::uint64_t>(0, per_replica_batches * replicas, 1), 0.0,
+        [&](const tbb::blocked_range<std::uint64_t>& range, double acc) {
+            std::vector<glm::dvec2> by_index, emission;
+            std::vector<std::uint32_t> order;
+            std::vector<std::uint64_t> scratch;
+            std::vector<glm::dvec3> origins(kWave), dirs(kWave);
+            for (std::uint64_t b = range.begin(); b < range.end(); ++b) {
+                // Clock reads only where stages are asked (four per batch of 65,536 photons).
+                auto lap = [&, last = Clock::now()](int stage) mutable {
+                    if (!stages) return;
+                    const auto now = Clock::now();
+                    batch_stages[b][stage] = std::chrono::duration<double>(now - last).count();
+                    last = now;
+                };
+                const auto replica = static_cast<std::uint32_t>(b / per_replica_batches);
+                const std::uint64_t first = (b % per_replica_batches) * kBatch;
+                const std::size_t n = static_cast<std::size_t>(std::min(per_replica, first + kBatch) - first);
+                const SamplerSeeds seeds = PhotonSampler::seeds(settings.sampler, settings.seed, replica);
+                by_index.resize(n);
+                PhotonSampler::emissions(seeds, first, n, reinterpret_cast<double*>(by_index.data()));
+                lap(0);
+                photon_batch_order(1, first, by_index, order, scratch);
+                lap(1);
+                emission.resize(n);
+                for (std::size_t j = 0; j < n; ++j) emission[j] = by_index[order[j]];
+                lap(2);
+                for (std::size_t w = 0; w < n; w += kWave) {
+                    const std::size_t m = std::min(kWave, n - w);
+                    emitter.sample_many(emission.data() + w, m, origins.data(), dirs.data());
+                    acc += dirs[m - 1].z + origins[0].x;
+                }
+                lap(3);
+            }
+            return acc;
+        },
+        [](double a, double b) { return a + b; });
+    benchmark::DoNotOptimize(sum);
+    const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+    if (stages) {
+        stages->fill(0.0);
+        for (const GenerationStages& b : batch_stages)
+            for (std::size_t k = 0; k < b.size(); ++k) (*stages)[k] += b[k];
+    }
+    return seconds;
+}
+
 // Each iteration runs the reference and then replays its rays in every mode, back to back, so that all
 // see the same machine conditions; the reported time is the reference's.
 void BM_ReferenceVsEmbree(benchmark::State& state) {
@@ -226,8 +340,14 @@ void BM_ReferenceVsEmbree(benchmark::State& state) {
     // or the viewer's do. Compare a process's first call (the README gives it) with the steady state.
     ReferenceResult last = compute_reference(*bs.tracer, *bs.chart, gbuffer, settings);
     for (int m = 0; m < kModes; ++m) replay(scene, m == kSingle ? rays : by_segment, static_cast<Mode>(m));
-    std::vector<double> reference_s;
+    // The stages measured apart (generation: single-light scenes only).
+    const bool one_light = bs.scene.lights.size() == 1;
+    const Emitter emitter = one_light ? make_emitter(bs.scene.lights[0], *bs.frame) : Emitter{};
+    for (int m = 0; m < kQueryModes; ++m) replay_tracer(*bs.tracer, by_segment, static_cast<QueryMode>(m));
+    if (one_light) generate_photons(emitter, settings);
+    std::vector<double> reference_s, generation_s;
     std::array<std::vector<double>, kModes> replay_s;
+    std::array<std::vector<double>, kQueryModes> tracer_s;
     for (auto _ : state) {
         last = ReferenceResult{};   // the previous result's memory is freed outside the timed region
         const auto start = std::chrono::steady_clock::now();
@@ -238,6 +358,9 @@ void BM_ReferenceVsEmbree(benchmark::State& state) {
         state.PauseTiming();
         for (int m = 0; m < kModes; ++m)
             replay_s[m].push_back(replay(scene, m == kSingle ? rays : by_segment, static_cast<Mode>(m)));
+        for (int m = 0; m < kQueryModes; ++m)
+            tracer_s[m].push_back(replay_tracer(*bs.tracer, by_segment, static_cast<QueryMode>(m)));
+        if (one_light) generation_s.push_back(generate_photons(emitter, settings));
         state.ResumeTiming();
     }
     // Medians over the iterations (each replay ran right after its reference run).
@@ -254,6 +377,17 @@ void BM_ReferenceVsEmbree(benchmark::State& state) {
     state.counters["anchor_mode"] = anchor;
     state.counters["ratio"] = replay_median[anchor] / reference;
     state.counters["ratio_single"] = replay_median[kSingle] / reference;
+    // The stages' ceilings: the ratio if everything but the tracer's batches (and the generation) cost
+    // nothing. Below 0.8 means those stages alone rule the goal out.
+    double tracer = replay_median[anchor] * 1e30;
+    for (int m = 0; m < kQueryModes; ++m) tracer = std::min(tracer, median(tracer_s[m]));
+    state.counters["tracer_over_anchor"] = tracer / replay_median[anchor];
+    state.counters["ceiling_tracer"] = replay_median[anchor] / tracer;
+    if (one_light) {
+        const double generation = median(generation_s);
+        state.counters["generation_over_anchor"] = generation / replay_median[anchor];
+        state.counters["ceiling_tracer_generation"] = replay_median[anchor] / (tracer + generation);
+    }
     state.counters["rays_per_photon"] = static_cast<double>(rays.size()) / settings.photons;
     state.counters["shadow_rays_per_photon"] = static_cast<double>(shadow_rays) / settings.photons;
     state.counters["threads"] = tbb::info::default_concurrency();
@@ -292,8 +426,69 @@ void BM_ReferenceQueryMode(benchmark::State& state) {
     state.SetLabel(kScenes.at(static_cast<std::size_t>(state.range(0))));
 }
 
+// The tracer's batches alone on the reference's recorded rays, grouped as the anchor replays them, in
+// mode {0 single, 1 packet8, 2 packet16} (for profiles of RayTracer's packing and hit completion).
+void BM_TracerBatches(benchmark::State& state) {
+    BenchScene& bs = BenchScene::get(static_cast<std::size_t>(state.range(0)));
+    const std::vector<RecordedRay> rays = grouped(record_reference_rays(*bs.tracer, *bs.chart, nullptr, settings_for(false)));
+    const auto mode = static_cast<QueryMode>(state.range(1));
+    // Bare Embree in the same mode on the same rays, right after each run: over_embree is the tracer's
+    // time over Embree's.
+    const Mode bare = mode == QueryMode::Single ? kGrouped : mode == QueryMode::Packet8 ? kPacket8 : kPacket16;
+    auto* scene = static_cast<RTCScene>(bs.tracer->embree_scene());
+    replay_tracer(*bs.tracer, rays, mode);   // untimed
+    replay(scene, rays, bare);
+    std::vector<double> tracer_s, embree_s;
+    for (auto _ : state) {
+        tracer_s.push_back(replay_tracer(*bs.tracer, rays, mode));
+        state.SetIterationTime(tracer_s.back());
+        embree_s.push_back(replay(scene, rays, bare));
+    }
+    state.counters["rays_per_s"] = static_cast<double>(rays.size()) / median(tracer_s);
+    state.counters["over_embree"] = median(tracer_s) / median(embree_s);
+    state.SetLabel(kScenes.at(static_cast<std::size_t>(state.range(0))));
+}
+
+// The photons' generation alone (single-light scenes), with each stage's share of its thread time
+// (medians over the iterations; the stage timings themselves are not in the generation_s counter).
+void BM_PhotonGeneration(benchmark::State& state) {
+    BenchScene& bs = BenchScene::get(static_cast<std::size_t>(state.range(0)));
+    if (bs.scene.lights.size() != 1) {
+        state.SkipWithError("one light only");
+        return;
+    }
+    const ReferenceSettings settings = settings_for(false);
+    const Emitter emitter = make_emitter(bs.scene.lights[0], *bs.frame);
+    generate_photons(emitter, settings);   // untimed
+    std::vector<double> seconds;
+    std::array<std::vector<double>, 4> shares;
+    for (auto _ : state) {
+        seconds.push_back(generate_photons(emitter, settings));
+        state.SetIterationTime(seconds.back());
+        state.PauseTiming();
+        GenerationStages stages;
+        generate_photons(emitter, settings, &stages);
+        double total = 0.0;
+        for (double t : stages) total += t;
+        for (std::size_t k = 0; k < stages.size(); ++k) shares[k].push_back(stages[k] / total);
+        state.ResumeTiming();
+    }
+    state.counters["generation_s"] = median(seconds);
+    state.counters["ns_per_photon"] = 1e9 * median(seconds) * tbb::info::default_concurrency() / settings.photons;
+    for (std::size_t k = 0; k < shares.size(); ++k)
+        state.counters[std::string("share_") + kGenerationStages[k]] = median(shares[k]);
+    state.SetLabel(kScenes.at(static_cast<std::size_t>(state.range(0))));
+}
+
 }  // namespace
 
+BENCHMARK(BM_PhotonGeneration)->ArgName("scene")->DenseRange(0, 3)->Unit(benchmark::kMillisecond)->UseManualTime()->Iterations(5);
+BENCHMARK(BM_TracerBatches)
+    ->ArgNames({"scene", "mode"})
+    ->ArgsProduct({{0, 1, 2, 3}, {0, 1, 2}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseManualTime()
+    ->Iterations(5);
 BENCHMARK(BM_ReferenceQueryMode)
     ->ArgNames({"scene", "mode"})
     ->ArgsProduct({{0, 1, 2, 3}, {0, 1, 2, 3}})
