@@ -280,7 +280,7 @@ double generate_photons(const Emitter& emitter, const ReferenceSettings& setting
         [&](const tbb::blocked_range<std::uint64_t>& range, double acc) {
             std::vector<glm::dvec2> by_index, emission;
             std::vector<std::uint32_t> order;
-            std::vector<std::uint64_t> scratch;
+            SortScratch scratch;
             std::vector<glm::dvec3> origins(kWave), dirs(kWave);
             for (std::uint64_t b = range.begin(); b < range.end(); ++b) {
                 // Clock reads only where stages are asked (four per batch of 65,536 photons).

@@ -14,6 +14,7 @@
 #include <numbers>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -296,7 +297,7 @@ TEST(PhotonSamplerBits, BatchedEmissionsEqualOneAtATime) {
 // A batch's photon order is a stable sort of its offsets by (light, Z-order cell of the emission
 // values), the cell's Morton key with the first value's bits in the even places: checked against
 // std::stable_sort for full and partial batches, one and three lights, and a first index that is not a
-// multiple of the light count.
+// multiple of the light count; 65,536 photons and fewer take the 32-bit keys, more the 64-bit ones.
 TEST(PhotonBatchOrder, StableSortByLightAndCell) {
     auto cell = [](const glm::dvec2& u) {
         const auto x = static_cast<std::uint32_t>(u.x * 256.0), y = static_cast<std::uint32_t>(u.y * 256.0);
@@ -311,12 +312,12 @@ TEST(PhotonBatchOrder, StableSortByLightAndCell) {
     };
     std::size_t checked = 0;
     for (std::uint64_t lights : {1ull, 3ull})
-        for (std::size_t n : {std::size_t{1000}, std::size_t{65536}}) {
+        for (std::size_t n : {std::size_t{1000}, std::size_t{65536}, std::size_t{65537}}) {
             const std::uint64_t first = 65536 * 5 + 1;
             std::vector<glm::dvec2> values(n);
             for (glm::dvec2& u : values) u = {uniform(), uniform()};
             std::vector<std::uint32_t> order, expected(n);
-            std::vector<std::uint64_t> scratch;
+            SortScratch scratch;
             photon_batch_order(lights, first, values, order, scratch);
             for (std::size_t i = 0; i < n; ++i) expected[i] = static_cast<std::uint32_t>(i);
             std::stable_sort(expected.begin(), expected.end(), [&](std::uint32_t a, std::uint32_t b) {
@@ -326,7 +327,38 @@ TEST(PhotonBatchOrder, StableSortByLightAndCell) {
             EXPECT_EQ(order, expected) << lights << " lights, " << n << " photons";
             ++checked;
         }
-    EXPECT_EQ(checked, 4u);
+    EXPECT_EQ(checked, 6u);
+}
+
+// The same stable sort for the reference's own batches of scrambled Sobol' emission values: a full and
+// a partial batch from an aligned start (one photon per cell at most: sorted by one scatter), an
+// unaligned batch (cells shared: the radix sort), each for one and three lights, over two replicas.
+TEST(PhotonBatchOrder, SobolBatchesAsTheReferenceMakesThem) {
+    std::size_t checked = 0;
+    for (std::uint32_t replica : {0u, 5u})
+        for (std::uint64_t lights : {1ull, 3ull})
+            for (auto [first, n] : {std::pair<std::uint64_t, std::size_t>{65536 * 3, 65536}, {65536 * 3 + 7, 65536},
+                                    {65536 * 2, 40000}}) {
+                const SamplerSeeds seeds = PhotonSampler::seeds(SamplerKind::Sobol, 1, replica);
+                std::vector<glm::dvec2> values(n);
+                PhotonSampler::emissions(seeds, first, n, reinterpret_cast<double*>(values.data()));
+                std::vector<std::uint32_t> order, expected(n);
+                SortScratch scratch;
+                photon_batch_order(lights, first, values, order, scratch);
+                auto key = [&](std::uint32_t k) {
+                    const auto x = static_cast<std::uint32_t>(values[k].x * 256.0);
+                    const auto y = static_cast<std::uint32_t>(values[k].y * 256.0);
+                    std::uint32_t m = 0;
+                    for (int b = 0; b < 8; ++b) m |= ((x >> b) & 1u) << (2 * b) | ((y >> b) & 1u) << (2 * b + 1);
+                    return std::pair<std::uint64_t, std::uint32_t>((first + k) % lights, m);
+                };
+                for (std::size_t i = 0; i < n; ++i) expected[i] = static_cast<std::uint32_t>(i);
+                std::stable_sort(expected.begin(), expected.end(),
+                                 [&](std::uint32_t a, std::uint32_t b) { return key(a) < key(b); });
+                EXPECT_EQ(order, expected) << "replica " << replica << ", " << lights << " lights, first " << first;
+                ++checked;
+            }
+    EXPECT_EQ(checked, 12u);
 }
 
 // A wave's emissions in one call (Emitter::sample_many: the libm calls in one loop, the arithmetic in

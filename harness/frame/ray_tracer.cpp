@@ -208,7 +208,8 @@ struct Packet<16> {
     static void occluded(const int* valid, RTCScene s, RTCIntersectContext* c, Ray* p) { rtcOccluded16(valid, s, c, p); }
 };
 
-// Queries a batch completes together, whatever the mode: their shading-normal loads overlap.
+// Queries a batch completes together, whatever the mode (their shading-normal records are prefetched as
+// Embree answers each, raw_hits).
 constexpr int kGroup = 16;
 
 
@@ -242,8 +243,17 @@ struct RayTracer::Impl {
         if (!valid_ray(q.origin, q.dir, tmin, q.tmax)) [[unlikely]]
             invalid_ray(what, q.origin, q.dir, tmin, q.tmax);
     }
-    // Embree's answers for queries[0, count), count <= kGroup, in `mode`.
+    // Embree's answers for queries[0, count), count <= kGroup, in `mode`. Each answer's shading-normal
+    // record is prefetched as soon as Embree gives it, so that the queries after it hide the miss.
     void raw_hits(const RayQuery* queries, int count, QueryMode mode, RawHit* raw) const;
+    void prefetch_normals(const RawHit& raw) const {
+        if (raw.geom_id == RTC_INVALID_GEOMETRY_ID) return;
+        const auto& normals = geometries[raw.geom_id].corner_normals;
+        if (normals.empty()) return;
+        const char* record = reinterpret_cast<const char*>(&normals[raw.prim_id]);
+        __builtin_prefetch(record);
+        __builtin_prefetch(record + sizeof(CornerNormals) - 1);
+    }
     template <int W>
     void raw_hits_packet(const RayQuery* queries, int count, RawHit* raw) const;
     void visibility(const RayQuery* queries, int count, QueryMode mode, std::uint8_t* occluded) const;
@@ -430,6 +440,7 @@ void RayTracer::Impl::raw_hits(const RayQuery* queries, int count, QueryMode mod
         const double tmin = std::max(q.tmin, min_tmin);
         check(q, tmin, "intersect");
         raw[k] = closest_single(scene, &context, q.origin, q.dir, tmin, q.tmax);
+        prefetch_normals(raw[k]);
     }
 }
 
@@ -453,11 +464,13 @@ void RayTracer::Impl::raw_hits_packet(const RayQuery* queries, int count, RawHit
     }
     Packet<W>::intersect(valid, scene, &context, &p);
     // A missed lane's other hit fields are not set.
-    for (int k = 0; k < count; ++k)
+    for (int k = 0; k < count; ++k) {
         raw[k] = p.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID
                      ? kMiss
                      : RawHit{p.hit.geomID[k], p.hit.primID[k], p.hit.u[k], p.hit.v[k], p.hit.Ng_x[k], p.hit.Ng_y[k],
                               p.hit.Ng_z[k], p.ray.tfar[k]};
+        prefetch_normals(raw[k]);
+    }
 }
 
 void RayTracer::Impl::visibility(const RayQuery* queries, int count, QueryMode mode, std::uint8_t* occluded) const {
@@ -505,16 +518,7 @@ void RayTracer::intersect(const RayQuery* queries, std::size_t n, Hit* hits, Que
     RawHit raw[kGroup];
     for (std::size_t first = 0; first < n; first += kGroup) {
         const int count = static_cast<int>(std::min<std::size_t>(kGroup, n - first));
-        impl_->raw_hits(queries + first, count, mode, raw);
-        // The group's shading-normal records first, so that their cache misses overlap.
-        for (int k = 0; k < count; ++k) {
-            if (raw[k].geom_id == RTC_INVALID_GEOMETRY_ID) continue;
-            const auto& normals = impl_->geometries[raw[k].geom_id].corner_normals;
-            if (normals.empty()) continue;
-            const char* record = reinterpret_cast<const char*>(&normals[raw[k].prim_id]);
-            __builtin_prefetch(record);
-            __builtin_prefetch(record + sizeof(Impl::CornerNormals) - 1);
-        }
+        impl_->raw_hits(queries + first, count, mode, raw);   // prefetches the shading-normal records
         for (int k = 0; k < count; ++k) {
             const RayQuery& q = queries[first + k];
             if (raw[k].geom_id == RTC_INVALID_GEOMETRY_ID) hits[first + k] = Hit{};

@@ -50,8 +50,14 @@ Emitter make_emitter(const Light& light, const FrameGeometry& frame);
 // depend only on its index, and deposits are integer sums, so the order changes nothing but the
 // round-off of the batch's flux ledger; it is a fixed function of the batch (stable sorts), so results
 // stay independent of the thread count. `lights` is the number of emitters (photon k belongs to light
-// k mod lights). `order` receives photon offsets k; `scratch` holds keys.
+// k mod lights). `order` receives photon offsets k.
+// `scratch` holds the sort's keys: 32-bit (key, offset) pairs for batches of up to 65,536 photons (the
+// reference's), 64-bit ones for larger batches.
+struct SortScratch {
+    std::vector<std::uint32_t> narrow;
+    std::vector<std::uint64_t> wide;
+};
 void photon_batch_order(std::uint64_t lights, std::uint64_t first, const std::vector<glm::dvec2>& values,
-                        std::vector<std::uint32_t>& order, std::vector<std::uint64_t>& scratch);
+                        std::vector<std::uint32_t>& order, SortScratch& scratch);
 
 }  // namespace caustics

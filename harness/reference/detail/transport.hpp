@@ -122,7 +122,7 @@ struct ShadowQuery {
 // by photon index through the order, it was a cache miss per photon: 1 MB per batch, in Z order).
 struct BatchOrder {
     std::vector<std::uint32_t> order;
-    std::vector<std::uint64_t> scratch;
+    SortScratch scratch;
     std::vector<glm::dvec2> emission, by_index;
 };
 
