@@ -25,6 +25,14 @@ namespace {
 // queries and hits stay in the core's L2 cache.
 constexpr std::size_t kWave = 512;
 
+// At least n elements, never fewer: a buffer that shrank with a wave's live photons and grew back
+// with the next wave rebuilt every element it regained (a Hit's 88 bytes of default values, each
+// overwritten by the query before it is read).
+template <class T>
+void grow(std::vector<T>& v, std::size_t n) {
+    if (v.size() < n) v.resize(n);
+}
+
 }  // namespace
 
 void Transport::trace_wave(std::uint32_t replica, std::uint64_t first, const std::uint32_t* order,
@@ -46,16 +54,20 @@ void Transport::trace_wave(std::uint32_t replica, std::uint64_t first, const std
             for (std::size_t k = 0; k < count; ++k)
                 emitters[light_of(first + order[w0 + k])].sample_many(emission + w0 + k, 1, &s.origins[k], &s.dirs[k]);
         }
+        // The emitted weights summed in a register (the same additions in the same order): through the
+        // ledger's memory each addition waited for the one before it.
+        double emitted = ledger.emitted;
         for (std::size_t k = 0; k < count; ++k) {
             const std::uint32_t offset = order[w0 + k];
             start(s.seeds.data(), first + offset, s.origins[k], s.dirs[k], static_cast<std::uint32_t>(k), s.photons[k]);
-            ledger.emitted += s.photons[k].w;
+            emitted += s.photons[k].w;
             s.active[k] = static_cast<std::uint32_t>(k);
         }
+        ledger.emitted = emitted;
         for (int segment = 0; !s.active.empty(); ++segment) {
             const std::size_t live = s.active.size();
-            s.queries.resize(live);
-            s.hits.resize(live);
+            grow(s.queries, live);
+            grow(s.hits, live);
             for (std::size_t j = 0; j < live; ++j) {
                 const PhotonState& p = s.photons[s.active[j]];
                 s.queries[j] = {p.origin, p.dir, 1e-6, 1e30};
@@ -67,11 +79,11 @@ void Transport::trace_wave(std::uint32_t replica, std::uint64_t first, const std
             for (std::size_t j = 0; j < live; ++j)
                 if (step(s.photons[s.active[j]], s.hits[j], s.events, acc, s.shadows)) s.next.push_back(s.active[j]);
             if (!s.shadows.empty()) {
-                s.shadow_rays.resize(s.shadows.size());
-                s.occluded.resize(s.shadows.size());
+                grow(s.shadow_rays, s.shadows.size());
+                grow(s.occluded, s.shadows.size());
                 for (std::size_t j = 0; j < s.shadows.size(); ++j) s.shadow_rays[j] = s.shadows[j].ray;
-                s.modes.run(QueryModeChooser::kVisibility, s.shadow_rays.size(), query_mode, [&](QueryMode mode) {
-                    tracer->occluded(s.shadow_rays.data(), s.shadow_rays.size(), s.occluded.data(), mode);
+                s.modes.run(QueryModeChooser::kVisibility, s.shadows.size(), query_mode, [&](QueryMode mode) {
+                    tracer->occluded(s.shadow_rays.data(), s.shadows.size(), s.occluded.data(), mode);
                 });
                 for (std::size_t j = 0; j < s.shadows.size(); ++j)
                     if (!s.occluded[j]) apply_shadow(s.shadows[j]);
