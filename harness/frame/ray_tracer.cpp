@@ -19,6 +19,7 @@
 #include <cassert>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <mutex>
@@ -53,9 +54,13 @@ void on_embree_error(void* /*user*/, RTCError code, const char* message) {
 }
 
 // One process-wide device: creating a device spins up Embree's thread pool and is expensive.
+// CAUSTICS_EMBREE_CONFIG, when set, is passed to rtcNewDevice as its configuration string (Embree 3's
+// "isa=avx2", "threads=N", "verbose=1", ...): with "isa=avx2" a CPU with AVX-512 runs the AVX2 kernels,
+// whose sums a machine without AVX-512 gives (tests/test_reference_bits.cpp checks both sets of hashes).
 RTCDevice shared_device() {
     static RTCDevice device = [] {
-        RTCDevice d = rtcNewDevice(nullptr);
+        const char* config = std::getenv("CAUSTICS_EMBREE_CONFIG");
+        RTCDevice d = rtcNewDevice(config && *config ? config : nullptr);
         if (!d) throw std::runtime_error("Embree: rtcNewDevice failed (error " +
                                          std::to_string(static_cast<int>(rtcGetDeviceError(nullptr))) + ")");
         rtcSetDeviceErrorFunction(d, on_embree_error, nullptr);
