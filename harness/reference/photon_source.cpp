@@ -4,6 +4,7 @@
 #include <numbers>
 
 #include <caustics/util/target_clones.hpp>
+#include <caustics/util/vector_sincos.hpp>
 
 namespace caustics {
 namespace {
@@ -199,16 +200,15 @@ void Emitter::sample_many(const glm::dvec2* u, std::size_t n, glm::dvec3* origin
         }
         return;
     }
-    // In chunks that stay in L1, the libm calls first: their latency no longer stalls the arithmetic.
+    // In chunks that stay in L1: the azimuths' cos and sin first, four per call of libmvec's kernels
+    // (util/vector_sincos.hpp; libm's scalar sincos took about 60 % of a point light's photon
+    // generation), then the directions.
     constexpr std::size_t kChunk = 64;
-    double cos_phi[kChunk], sin_phi[kChunk];
+    double phi[kChunk], cos_phi[kChunk], sin_phi[kChunk];
     for (std::size_t k0 = 0; k0 < n; k0 += kChunk) {
         const std::size_t m = std::min(kChunk, n - k0);
-        for (std::size_t k = 0; k < m; ++k) {
-            const double phi = 2.0 * std::numbers::pi * u[k0 + k].y;
-            cos_phi[k] = std::cos(phi);
-            sin_phi[k] = std::sin(phi);
-        }
+        for (std::size_t k = 0; k < m; ++k) phi[k] = 2.0 * std::numbers::pi * u[k0 + k].y;
+        vector_sincos(phi, m, cos_phi, sin_phi);
         point_directions(*this, u + k0, cos_phi, sin_phi, m, dirs + k0);
         for (std::size_t k = 0; k < m; ++k) origins[k0 + k] = position;
     }

@@ -30,8 +30,9 @@ struct Emitter {
 
     // Photon k of n leaves from origins[k] along dirs[k] for its emission sample values u[k] (dimensions
     // 0 and 1): a directional light's rectangle; a point light's cone, uniform in solid angle. A point
-    // light's cos and sin of phi run in a loop of their own (libm calls), the rest in one that runs four
-    // photons per AVX2 vector with the bits of one photon at a time.
+    // light's cos and sin of phi come from vector_sincos (util/vector_sincos.hpp: libmvec's kernels
+    // where the CPU has AVX2), the rest from a loop that runs four photons per AVX2 vector; every photon
+    // gets the bits it would get alone.
     void sample_many(const glm::dvec2* u, std::size_t n, glm::dvec3* origins, glm::dvec3* dirs) const;
     void sample(double u1, double u2, glm::dvec3& origin, glm::dvec3& dir) const {
         const glm::dvec2 u(u1, u2);

@@ -30,8 +30,9 @@ namespace caustics {
 namespace {
 
 // Bump whenever reference.cpp changes what it computes (transport, estimators, sampling).
-// 3: replicas, quasi-Monte Carlo sampler, sums stored; 4: media (extinction, the scattered ledger, camera_volume)
-constexpr std::uint32_t kReferenceVersion = 4;
+// 3: replicas, quasi-Monte Carlo sampler, sums stored; 4: media (extinction, the scattered ledger, camera_volume);
+// 5: a point light's azimuth cos and sin from libmvec's kernels (last bits of the directions)
+constexpr std::uint32_t kReferenceVersion = 5;
 constexpr std::uint32_t kFileFormat = 2;
 constexpr char kMagic[8] = {'C', 'A', 'U', 'S', 'R', 'E', 'F', '\n'};
 
