@@ -29,7 +29,21 @@ bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; 
 
 }  // namespace
 
-TEST(VectorSincos, WithinFourUlpOfLibm) {
+// A GCC build on x86-64 glibc links libmvec (harness/CMakeLists.txt) and runs its kernels on a CPU with
+// AVX2 and FMA: without them the reference loses their speed and its recorded bits.
+TEST(VectorSincos, RunsLibmvecWhereTheBuildAndCpuAllow) {
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__GLIBC__)
+    if (!__builtin_cpu_supports("avx2") || !__builtin_cpu_supports("fma"))
+        GTEST_SKIP() << "the CPU lacks AVX2 or FMA: libm's scalar cos and sin";
+    EXPECT_TRUE(vector_sincos_uses_libmvec());
+#else
+    GTEST_SKIP() << "not a GCC build for x86-64 glibc: libm's scalar cos and sin";
+#endif
+}
+
+// libmvec's bound is 4 ulp from the exact value and libm's is within 1 ulp of it, so the two may differ
+// by 5 (3 measured on an AMD EPYC; the test records its worst values as properties).
+TEST(VectorSincos, WithinLibmvecBoundOfLibm) {
     std::vector<double> angles;
     const std::size_t n = 200003;   // not a multiple of 4: the padded last group is covered
     for (std::size_t k = 0; k < n; ++k) angles.push_back(2.0 * std::numbers::pi * (static_cast<double>(k) / n));
@@ -43,7 +57,6 @@ TEST(VectorSincos, WithinFourUlpOfLibm) {
         worst_cos = std::max(worst_cos, ulps(c[k], std::cos(angles[k])));
         worst_sin = std::max(worst_sin, ulps(s[k], std::sin(angles[k])));
     }
-    // libmvec's bound is 4 ulp from the exact value; libm's is within 1 ulp of it.
     RecordProperty("worst_cos_ulp", std::to_string(worst_cos));
     RecordProperty("worst_sin_ulp", std::to_string(worst_sin));
     EXPECT_LE(worst_cos, 5.0);

@@ -201,8 +201,8 @@ void Emitter::sample_many(const glm::dvec2* u, std::size_t n, glm::dvec3* origin
         return;
     }
     // In chunks that stay in L1: the azimuths' cos and sin first, four per call of libmvec's kernels
-    // (util/vector_sincos.hpp; libm's scalar sincos took about 60 % of a point light's photon
-    // generation), then the directions.
+    // (util/vector_sincos.hpp; with libm's scalar sincos the emission took about 60 % of a point
+    // light's photon generation), then the directions.
     constexpr std::size_t kChunk = 64;
     double phi[kChunk], cos_phi[kChunk], sin_phi[kChunk];
     for (std::size_t k0 = 0; k0 < n; k0 += kChunk) {
