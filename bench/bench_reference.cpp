@@ -24,6 +24,12 @@
 // BM_PhotonGeneration/scene: the generation alone, with each stage's share of its thread time.
 // BM_TracerBatches/scene/mode:{0 single, 1 packet8, 2 packet16}: RayTracer's batches alone on the recorded
 //                       rays; over_embree: their time over bare Embree's in the same mode, same rays.
+//   ideal_over_anchor, ceiling_ideal  (pool and sphere without the camera view) the idealised path of
+//                       ideal_path.hpp on the same photons, over the anchor / the anchor over it:
+//                       what a hand-vectorised structure-of-arrays transport without the reference's
+//                       generality reaches; ideal_rays_per_photon and ideal_deposits_per_photon against
+//                       rays_per_photon and deposits_per_photon show that it traces the same paths
+// BM_IdealPath/scene:{0 pool, 1 sphere}: the idealised path alone (for profiles).
 // BM_Reference/scene/camera: compute_reference alone (for profiles: perf record -g ... --benchmark_filter=BM_Reference/).
 //
 //   build/release/bench/bench_reference [--benchmark_filter=...]
@@ -52,6 +58,7 @@
 #include <caustics/reference/reference.hpp>
 #include <caustics/reference/reference_rays.hpp>
 #include <caustics/scene/scene.hpp>
+#include "ideal_path.hpp"
 
 using namespace caustics;
 
@@ -268,11 +275,10 @@ constexpr std::array<const char*, 4> kGenerationStages = {"sampler", "order", "g
 
 double generate_photons(const Emitter& emitter, const ReferenceSettings& settings, GenerationStages* stages = nullptr) {
     using Clock = std::chrono::steady_clock;
-    constexpr std::uint64_t kBatch = 65536;
     constexpr std::size_t kWave = 512;
     const auto replicas = static_cast<std::uint64_t>(settings.replicas);
     const std::uint64_t per_replica = (settings.photons + replicas - 1) / replicas;
-    const std::uint64_t per_replica_batches = (per_replica + kBatch - 1) / kBatch;
+    const std::uint64_t per_replica_batches = (per_replica + ideal::kPhotonBatch - 1) / ideal::kPhotonBatch;
     std::vector<GenerationStages> batch_stages(per_replica_batches * replicas);
     const auto start = Clock::now();
     const double sum = tbb::parallel_reduce(
@@ -290,10 +296,8 @@ double generate_photons(const Emitter& emitter, const ReferenceSettings& setting
                     batch_stages[b][stage] = std::chrono::duration<double>(now - last).count();
                     last = now;
                 };
-                const auto replica = static_cast<std::uint32_t>(b / per_replica_batches);
-                const std::uint64_t first = (b % per_replica_batches) * kBatch;
-                const std::size_t n = static_cast<std::size_t>(std::min(per_replica, first + kBatch) - first);
-                const SamplerSeeds seeds = PhotonSampler::seeds(settings.sampler, settings.seed, replica);
+                const ideal::PhotonBatch batch(b, per_replica_batches, per_replica, settings);
+                const auto [replica, first, n, seeds] = batch;
                 by_index.resize(n);
                 PhotonSampler::emissions(seeds, first, n, reinterpret_cast<double*>(by_index.data()));
                 lap(0);
@@ -322,6 +326,55 @@ double generate_photons(const Emitter& emitter, const ReferenceSettings& setting
     return seconds;
 }
 
+// The idealised path's scene (ideal_path.hpp) where the scene is one dielectric (an exact sphere or
+// a height field, without absorption, scattering or dispersion) among diffuse objects, lit by one light,
+// without a medium: `sphere` and `pool`. Otherwise scene == nullptr.
+ideal::IdealScene ideal_scene_of(BenchScene& bs) {
+    ideal::IdealScene s;
+    const Scene& sc = bs.scene;
+    if (!ideal::supported() || sc.lights.size() != 1 || sc.medium.present) return s;
+    int dielectric = -1;
+    for (std::size_t i = 0; i < sc.objects.size(); ++i) {
+        const Material& m = sc.objects[i].material;
+        if (m.type == MaterialType::Dielectric) {
+            if (dielectric >= 0 || m.absorption != 0.0 || m.scattering != 0.0 || m.dispersion != 0.0) return s;
+            dielectric = static_cast<int>(i);
+        } else if (m.type != MaterialType::Diffuse) {
+            return s;
+        }
+        const ObjectInstance& inst = bs.frame->objects[i];
+        if (!inst.analytic_sphere && inst.mesh.empty()) return s;   // geometry ids would not be object indices
+    }
+    if (dielectric < 0) return s;
+    const ObjectInstance& inst = bs.frame->objects[static_cast<std::size_t>(dielectric)];
+    if (!inst.analytic_sphere && !inst.heightfield) return s;
+    // RayTracer attaches one geometry per object, in order: check it with a ray down onto the dielectric.
+    auto* embree = static_cast<RTCScene>(bs.tracer->embree_scene());
+    const glm::dvec3 top = 0.5 * (inst.bounds.lo + inst.bounds.hi) +
+                           glm::dvec3(0.0, 0.0, inst.bounds.hi.z - inst.bounds.lo.z + 1.0);
+    const Hit probe = bs.tracer->intersect(top, {0.0, 0.0, -1.0}, 0.0, 1e30);
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRayHit rh;
+    rh.ray = {static_cast<float>(top.x), static_cast<float>(top.y), static_cast<float>(top.z), 0.0f,
+              0.0f, 0.0f, -1.0f, 0.0f, 1e30f, 0xFFFFFFFFu, 0u, 0u};
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(embree, &context, &rh);
+    if (!probe.valid || probe.object != dielectric || rh.hit.geomID != static_cast<unsigned>(dielectric)) return s;
+    s.scene = embree;
+    s.dielectric_geom = static_cast<unsigned>(dielectric);
+    s.receiver_geom = static_cast<unsigned>(sc.receiver.object_index);
+    s.heightfield = inst.heightfield.get();
+    s.center = inst.object->center;
+    s.radius = inst.object->radius;
+    s.ior = inst.object->material.ior;
+    s.fresnel = sc.fresnel;
+    s.max_depth = static_cast<std::uint32_t>(sc.max_specular_depth);
+    s.chart = bs.chart.get();
+    return s;
+}
+
 // Each iteration runs the reference and then replays its rays in every mode, back to back, so that all
 // see the same machine conditions; the reported time is the reference's.
 void BM_ReferenceVsEmbree(benchmark::State& state) {
@@ -345,7 +398,13 @@ void BM_ReferenceVsEmbree(benchmark::State& state) {
     const Emitter emitter = one_light ? make_emitter(bs.scene.lights[0], *bs.frame) : Emitter{};
     for (int m = 0; m < kQueryModes; ++m) replay_tracer(*bs.tracer, by_segment, static_cast<QueryMode>(m));
     if (one_light) generate_photons(emitter, settings);
-    std::vector<double> reference_s, generation_s;
+    // The idealised path on `pool` and `sphere` without the camera view (ideal_path.hpp).
+    const ideal::IdealScene ideal_scene = camera ? ideal::IdealScene{} : ideal_scene_of(bs);
+    const bool with_ideal = ideal_scene.scene != nullptr;
+    ideal::Result ideal_run;
+    ideal::Buffers ideal_buffers;
+    if (with_ideal) ideal_run = ideal::run(ideal_scene, emitter, settings, ideal_buffers);
+    std::vector<double> reference_s, generation_s, ideal_s;
     std::array<std::vector<double>, kModes> replay_s;
     std::array<std::vector<double>, kQueryModes> tracer_s;
     for (auto _ : state) {
@@ -361,6 +420,7 @@ void BM_ReferenceVsEmbree(benchmark::State& state) {
         for (int m = 0; m < kQueryModes; ++m)
             tracer_s[m].push_back(replay_tracer(*bs.tracer, by_segment, static_cast<QueryMode>(m)));
         if (one_light) generation_s.push_back(generate_photons(emitter, settings));
+        if (with_ideal) ideal_s.push_back((ideal_run = ideal::run(ideal_scene, emitter, settings, ideal_buffers)).seconds);
         state.ResumeTiming();
     }
     // Medians over the iterations (each replay ran right after its reference run).
@@ -388,10 +448,40 @@ void BM_ReferenceVsEmbree(benchmark::State& state) {
         state.counters["generation_over_anchor"] = generation / replay_median[anchor];
         state.counters["ceiling_tracer_generation"] = replay_median[anchor] / (tracer + generation);
     }
+    if (with_ideal) {
+        // The idealised path traces its own rays (the same photons; its Russian roulette draws differ),
+        // about as many as the reference's: ideal_rays_per_photon says how close.
+        state.counters["ideal_over_anchor"] = median(ideal_s) / replay_median[anchor];
+        state.counters["ceiling_ideal"] = replay_median[anchor] / median(ideal_s);
+        state.counters["ideal_rays_per_photon"] = static_cast<double>(ideal_run.rays) / settings.photons;
+        state.counters["ideal_deposits_per_photon"] = static_cast<double>(ideal_run.deposited) / settings.photons;
+        state.counters["deposits_per_photon"] = static_cast<double>(last.sums->ledger_units.deposited_receiver) /
+                                                std::max(1e-300, last.sums->ledger_units.emitted);
+    }
     state.counters["rays_per_photon"] = static_cast<double>(rays.size()) / settings.photons;
     state.counters["shadow_rays_per_photon"] = static_cast<double>(shadow_rays) / settings.photons;
     state.counters["threads"] = tbb::info::default_concurrency();
     state.counters["noise_nrmse"] = last.noise_nrmse;
+    state.SetLabel(kScenes.at(static_cast<std::size_t>(state.range(0))));
+}
+
+// The idealised path alone (ideal_path.hpp), on `pool` (0) and `sphere` (1): for profiles.
+void BM_IdealPath(benchmark::State& state) {
+    BenchScene& bs = BenchScene::get(static_cast<std::size_t>(state.range(0)));
+    const ideal::IdealScene scene = ideal_scene_of(bs);
+    if (!scene.scene) {
+        state.SkipWithError("not a scene the idealised path models, or a CPU without AVX2 and FMA");
+        return;
+    }
+    const ReferenceSettings settings = settings_for(false);
+    const Emitter emitter = make_emitter(bs.scene.lights[0], *bs.frame);
+    ideal::Buffers buffers;
+    ideal::run(scene, emitter, settings, buffers);   // untimed
+    ideal::Result r;
+    for (auto _ : state) r = ideal::run(scene, emitter, settings, buffers);
+    state.counters["photons_per_s"] = benchmark::Counter(static_cast<double>(settings.photons) * state.iterations(),
+                                                         benchmark::Counter::kIsRate);
+    state.counters["rays_per_photon"] = static_cast<double>(r.rays) / settings.photons;
     state.SetLabel(kScenes.at(static_cast<std::size_t>(state.range(0))));
 }
 
@@ -501,6 +591,7 @@ BENCHMARK(BM_ReferenceVsEmbree)
     ->Unit(benchmark::kMillisecond)
     ->UseManualTime()
     ->Iterations(5);
+BENCHMARK(BM_IdealPath)->ArgName("scene")->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->Iterations(5);
 BENCHMARK(BM_Reference)
     ->ArgNames({"scene", "camera"})
     ->ArgsProduct({{0, 1, 2, 3}, {0, 1}})

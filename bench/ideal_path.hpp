@@ -1,0 +1,360 @@
+#pragma once
+// An idealised light tracer for `sphere` and `pool`: a bound on what a structure-of-arrays transport could
+// cost (docs/reference_throughput.md). bench_reference.cpp times it against the same anchor as the
+// reference (counters ideal_over_anchor, ceiling_ideal).
+//
+// It traces the same photons as the reference: its Sobol' batches, their Z order and the light's
+// emission. It uses the same scene in Embree (16-ray packets, coherent) and the physics the reference
+// applies on these scenes:
+// - the dielectric's hit: the exact ray-sphere distance, or the height field's bilinear normal
+//   (HeightField::sample_normal, one lane at a time, for the dielectric's hits only);
+// - Snell's law and total internal reflection;
+// - Fresnel by Russian roulette where the scene asks (Scene::fresnel; neither scene does);
+// - the deposit on the receiver's bins after a specular event; any other diffuse hit ends the photon.
+//
+// What it leaves out, each in its favour:
+// - the flux ledger, media, the camera view and dispersion;
+// - the generality of materials and objects (one dielectric, diffuse objects otherwise);
+// - a 32-bit LCG per photon in place of the Sobol' draw of each Fresnel choice;
+// - bins private to each thread (no atomic adds), never cleared;
+// - every check the reference makes.
+//
+// Each wave's dielectric hits are stepped four lanes at a time, by hand with AVX2 and FMA.
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include <embree3/rtcore.h>
+#include <immintrin.h>
+#include <glm/glm.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_reduce.h>
+
+#include <caustics/frame/receiver_chart.hpp>
+#include <caustics/reference/photon_sampler.hpp>
+#include <caustics/reference/photon_source.hpp>
+#include <caustics/reference/reference.hpp>
+
+namespace ideal {
+
+// One dielectric (an exact sphere or a height field's triangles) and diffuse objects, one of them the
+// receiver: what `sphere` and `pool` are.
+struct IdealScene {
+    RTCScene scene = nullptr;
+    unsigned dielectric_geom = RTC_INVALID_GEOMETRY_ID;     // the dielectric's geometry id
+    unsigned receiver_geom = RTC_INVALID_GEOMETRY_ID;
+    const caustics::HeightField* heightfield = nullptr;   // null: the dielectric is the sphere below
+    glm::dvec3 center{0.0};
+    double radius = 1.0;
+    double ior = 1.5;
+    bool fresnel = false;   // Scene::fresnel: Russian roulette on Fresnel's reflectance, else TIR only
+    std::uint32_t max_depth = 8;   // Scene::max_specular_depth
+    const caustics::ReceiverChart* chart = nullptr;
+};
+
+// The idealised path is hand-vectorised for AVX2 and FMA only.
+inline bool supported() {
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+    return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+#else
+    return false;
+#endif
+}
+
+struct Result {
+    double seconds = 0.0;
+    std::uint64_t rays = 0;
+    std::uint64_t deposited = 0;
+};
+
+// A wave's photons, one array per coordinate.
+struct Wave {
+    std::vector<double> ox, oy, oz, dx, dy, dz, nx, ny, nz;   // n: a height-field hit's normal
+    std::vector<std::uint32_t> rng, depth;
+    std::vector<float> tfar;
+    std::vector<unsigned> geom;
+    void resize(std::size_t n) {
+        for (auto* v : {&ox, &oy, &oz, &dx, &dy, &dz, &nx, &ny, &nz}) v->resize(n);
+        rng.resize(n), depth.resize(n), tfar.resize(n), geom.resize(n);
+    }
+};
+
+// Embree's closest hits for the wave's first n rays, 16 at a time.
+inline void trace(RTCScene scene, Wave& w, std::size_t n) {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    for (std::size_t k0 = 0; k0 < n; k0 += 16) {
+        alignas(64) RTCRayHit16 p;
+        alignas(64) int valid[16];
+        for (int k = 0; k < 16; ++k) {
+            const std::size_t i = k0 + k < n ? k0 + k : k0;
+            valid[k] = k0 + k < n ? -1 : 0;
+            p.ray.org_x[k] = static_cast<float>(w.ox[i]), p.ray.org_y[k] = static_cast<float>(w.oy[i]);
+            p.ray.org_z[k] = static_cast<float>(w.oz[i]);
+            p.ray.dir_x[k] = static_cast<float>(w.dx[i]), p.ray.dir_y[k] = static_cast<float>(w.dy[i]);
+            p.ray.dir_z[k] = static_cast<float>(w.dz[i]);
+            p.ray.tnear[k] = 1e-4f, p.ray.tfar[k] = 1e30f, p.ray.time[k] = 0.0f;
+            p.ray.mask[k] = 0xFFFFFFFFu, p.ray.id[k] = 0u, p.ray.flags[k] = 0u;
+            p.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID, p.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+        }
+        rtcIntersect16(valid, scene, &context, &p);
+        for (std::size_t k = 0; k < 16 && k0 + k < n; ++k) {
+            w.tfar[k0 + k] = p.ray.tfar[k];
+            w.geom[k0 + k] = p.hit.geomID[k];
+        }
+    }
+}
+
+// Every lane stepped as a sphere hit (lanes that are not are overwritten or dropped by the caller): the
+// refined distance, the outward normal, Snell's law, Fresnel by Russian roulette, the new ray. Lanes
+// n .. n rounded up to 4 are stepped too (the arrays hold a whole wave): harmless garbage.
+inline void step_sphere_scalar(const IdealScene& s, Wave& w, std::size_t n) {
+    for (std::size_t k = 0; k < n; ++k) {
+        const double ax = w.ox[k] - s.center.x, ay = w.oy[k] - s.center.y, az = w.oz[k] - s.center.z;
+        const double dx = w.dx[k], dy = w.dy[k], dz = w.dz[k];
+        const double a = dx * dx + dy * dy + dz * dz, b = ax * dx + ay * dy + az * dz;
+        const double c = ax * ax + ay * ay + az * az - s.radius * s.radius;
+        const double disc = b * b - a * c;
+        const double sq = std::sqrt(disc > 0.0 ? disc : 0.0);
+        const double q = b > 0.0 ? -(b + sq) : -(b - sq);
+        const double t0 = q / a, t1 = c / q, tf = w.tfar[k];
+        const double t = std::abs(t0 - tf) < std::abs(t1 - tf) ? t0 : t1;
+        const double px = w.ox[k] + t * dx, py = w.oy[k] + t * dy, pz = w.oz[k] + t * dz;
+        const double inv_r = 1.0 / s.radius;
+        double nx = (px - s.center.x) * inv_r, ny = (py - s.center.y) * inv_r, nz = (pz - s.center.z) * inv_r;
+        const double dn = dx * nx + dy * ny + dz * nz;
+        const bool outside = dn < 0.0;
+        const double sign = outside ? 1.0 : -1.0;
+        nx *= sign, ny *= sign, nz *= sign;
+        const double cos_i = -dn * sign;
+        const double n_i = outside ? 1.0 : s.ior, n_t = outside ? s.ior : 1.0, eta = n_i / n_t;
+        const double sin2_t = eta * eta * (1.0 - cos_i * cos_i), cos2_t = 1.0 - sin2_t;
+        const double cos_t = std::sqrt(cos2_t > 0.0 ? cos2_t : 0.0);
+        const double rs = (n_i * cos_i - n_t * cos_t) / (n_i * cos_i + n_t * cos_t);
+        const double rp = (n_t * cos_i - n_i * cos_t) / (n_t * cos_i + n_i * cos_t);
+        w.rng[k] = w.rng[k] * 1664525u + 1013904223u;
+        const double u = static_cast<double>(static_cast<std::int32_t>(w.rng[k] >> 8)) * 0x1.0p-24;
+        const bool reflect = sin2_t >= 1.0 || (s.fresnel && u < 0.5 * (rs * rs + rp * rp));
+        const double f = reflect ? 1.0 : eta, g = reflect ? 2.0 * cos_i : eta * cos_i - cos_t;
+        const double ex = f * dx + g * nx, ey = f * dy + g * ny, ez = f * dz + g * nz;
+        const double inv = 1.0 / std::sqrt(ex * ex + ey * ey + ez * ez);
+        w.dx[k] = ex * inv, w.dy[k] = ey * inv, w.dz[k] = ez * inv;
+        w.ox[k] = px, w.oy[k] = py, w.oz[k] = pz;
+    }
+}
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+// The same step, four lanes per AVX2 vector with FMA (hand-vectorised: the bound should not depend on
+// what the compiler's vectoriser makes of the branches).
+__attribute__((target("avx2,fma"))) inline __m256d dot(__m256d ax, __m256d ay, __m256d az, __m256d bx, __m256d by,
+                                                        __m256d bz) {
+    return _mm256_fmadd_pd(ax, bx, _mm256_fmadd_pd(ay, by, _mm256_mul_pd(az, bz)));
+}
+
+// Snell's law, total internal reflection and Fresnel by Russian roulette for lanes k .. k + 3 at p with
+// the outward normal n, moving along d: the new ray goes to the wave's arrays.
+template <bool Fresnel>
+__attribute__((target("avx2,fma"))) inline void refract4(const IdealScene& s, Wave& w, std::size_t k, __m256d px,
+                                                         __m256d py, __m256d pz, __m256d nx, __m256d ny, __m256d nz,
+                                                         __m256d dx, __m256d dy, __m256d dz) {
+    const __m256d ior = _mm256_set1_pd(s.ior), one = _mm256_set1_pd(1.0), zero = _mm256_setzero_pd();
+    const __m256d two = _mm256_set1_pd(2.0), half = _mm256_set1_pd(0.5), minus_one = _mm256_set1_pd(-1.0);
+    const __m256d dn = dot(dx, dy, dz, nx, ny, nz);
+    const __m256d outside = _mm256_cmp_pd(dn, zero, _CMP_LT_OQ);
+    const __m256d sign = _mm256_blendv_pd(minus_one, one, outside);
+    nx = _mm256_mul_pd(nx, sign), ny = _mm256_mul_pd(ny, sign), nz = _mm256_mul_pd(nz, sign);
+    const __m256d cos_i = _mm256_sub_pd(zero, _mm256_mul_pd(dn, sign));
+    const __m256d n_i = _mm256_blendv_pd(ior, one, outside), n_t = _mm256_blendv_pd(one, ior, outside);
+    const __m256d eta = _mm256_div_pd(n_i, n_t);
+    const __m256d sin2_t = _mm256_mul_pd(_mm256_mul_pd(eta, eta), _mm256_fnmadd_pd(cos_i, cos_i, one));
+    const __m256d cos_t = _mm256_sqrt_pd(_mm256_max_pd(_mm256_sub_pd(one, sin2_t), zero));
+    __m256d reflect = _mm256_cmp_pd(sin2_t, one, _CMP_GE_OQ);
+    if constexpr (Fresnel) {
+        const __m256d ici = _mm256_mul_pd(n_i, cos_i), tct = _mm256_mul_pd(n_t, cos_t);
+        const __m256d tci = _mm256_mul_pd(n_t, cos_i), ict = _mm256_mul_pd(n_i, cos_t);
+        const __m256d rs = _mm256_div_pd(_mm256_sub_pd(ici, tct), _mm256_add_pd(ici, tct));
+        const __m256d rp = _mm256_div_pd(_mm256_sub_pd(tci, ict), _mm256_add_pd(tci, ict));
+        const __m256d fresnel = _mm256_mul_pd(half, _mm256_fmadd_pd(rs, rs, _mm256_mul_pd(rp, rp)));
+        __m128i state = _mm_loadu_si128(reinterpret_cast<const __m128i*>(&w.rng[k]));
+        state = _mm_add_epi32(_mm_mullo_epi32(state, _mm_set1_epi32(1664525)), _mm_set1_epi32(1013904223));
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(&w.rng[k]), state);
+        const __m256d u = _mm256_mul_pd(_mm256_cvtepi32_pd(_mm_srli_epi32(state, 8)), _mm256_set1_pd(0x1.0p-24));
+        reflect = _mm256_or_pd(reflect, _mm256_cmp_pd(u, fresnel, _CMP_LT_OQ));
+    }
+    const __m256d f = _mm256_blendv_pd(eta, one, reflect);
+    const __m256d g = _mm256_blendv_pd(_mm256_fmsub_pd(eta, cos_i, cos_t), _mm256_mul_pd(two, cos_i), reflect);
+    const __m256d ex = _mm256_fmadd_pd(f, dx, _mm256_mul_pd(g, nx)), ey = _mm256_fmadd_pd(f, dy, _mm256_mul_pd(g, ny));
+    const __m256d ez = _mm256_fmadd_pd(f, dz, _mm256_mul_pd(g, nz));
+    const __m256d inv = _mm256_div_pd(one, _mm256_sqrt_pd(dot(ex, ey, ez, ex, ey, ez)));
+    _mm256_storeu_pd(&w.dx[k], _mm256_mul_pd(ex, inv)), _mm256_storeu_pd(&w.dy[k], _mm256_mul_pd(ey, inv));
+    _mm256_storeu_pd(&w.dz[k], _mm256_mul_pd(ez, inv));
+    _mm256_storeu_pd(&w.ox[k], px), _mm256_storeu_pd(&w.oy[k], py), _mm256_storeu_pd(&w.oz[k], pz);
+}
+
+// The sphere's lanes: the exact distance nearest Embree's, the position and the outward normal, then
+// refract4.
+template <bool Fresnel>
+__attribute__((target("avx2,fma"))) inline void step_sphere_avx2(const IdealScene& s, Wave& w, std::size_t n) {
+    const __m256d cx = _mm256_set1_pd(s.center.x), cy = _mm256_set1_pd(s.center.y), cz = _mm256_set1_pd(s.center.z);
+    const __m256d r2 = _mm256_set1_pd(s.radius * s.radius), inv_r = _mm256_set1_pd(1.0 / s.radius);
+    const __m256d zero = _mm256_setzero_pd();
+    const __m256d abs_mask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7FFFFFFFFFFFFFFFll));
+    for (std::size_t k = 0; k < n; k += 4) {
+        const __m256d ox = _mm256_loadu_pd(&w.ox[k]), oy = _mm256_loadu_pd(&w.oy[k]), oz = _mm256_loadu_pd(&w.oz[k]);
+        const __m256d dx = _mm256_loadu_pd(&w.dx[k]), dy = _mm256_loadu_pd(&w.dy[k]), dz = _mm256_loadu_pd(&w.dz[k]);
+        const __m256d ax = _mm256_sub_pd(ox, cx), ay = _mm256_sub_pd(oy, cy), az = _mm256_sub_pd(oz, cz);
+        const __m256d a = dot(dx, dy, dz, dx, dy, dz), b = dot(ax, ay, az, dx, dy, dz);
+        const __m256d c = _mm256_sub_pd(dot(ax, ay, az, ax, ay, az), r2);
+        const __m256d sq = _mm256_sqrt_pd(_mm256_max_pd(_mm256_fmsub_pd(b, b, _mm256_mul_pd(a, c)), zero));
+        const __m256d b_pos = _mm256_cmp_pd(b, zero, _CMP_GT_OQ);
+        const __m256d q = _mm256_sub_pd(zero, _mm256_add_pd(b, _mm256_blendv_pd(_mm256_sub_pd(zero, sq), sq, b_pos)));
+        const __m256d t0 = _mm256_div_pd(q, a), t1 = _mm256_div_pd(c, q);
+        const __m256d tf = _mm256_cvtps_pd(_mm_loadu_ps(&w.tfar[k]));
+        const __m256d pick0 = _mm256_cmp_pd(_mm256_and_pd(_mm256_sub_pd(t0, tf), abs_mask),
+                                            _mm256_and_pd(_mm256_sub_pd(t1, tf), abs_mask), _CMP_LT_OQ);
+        const __m256d t = _mm256_blendv_pd(t1, t0, pick0);
+        const __m256d px = _mm256_fmadd_pd(t, dx, ox), py = _mm256_fmadd_pd(t, dy, oy), pz = _mm256_fmadd_pd(t, dz, oz);
+        const __m256d nx = _mm256_mul_pd(_mm256_sub_pd(px, cx), inv_r), ny = _mm256_mul_pd(_mm256_sub_pd(py, cy), inv_r);
+        const __m256d nz = _mm256_mul_pd(_mm256_sub_pd(pz, cz), inv_r);
+        refract4<Fresnel>(s, w, k, px, py, pz, nx, ny, nz, dx, dy, dz);
+    }
+}
+
+// The height field's lanes: the position at Embree's distance, the normal from the wave's arrays
+// (step_heightfield fills them), then refract4.
+template <bool Fresnel>
+__attribute__((target("avx2,fma"))) inline void refract_heightfield_avx2(const IdealScene& s, Wave& w, std::size_t n) {
+    for (std::size_t k = 0; k < n; k += 4) {
+        const __m256d ox = _mm256_loadu_pd(&w.ox[k]), oy = _mm256_loadu_pd(&w.oy[k]), oz = _mm256_loadu_pd(&w.oz[k]);
+        const __m256d dx = _mm256_loadu_pd(&w.dx[k]), dy = _mm256_loadu_pd(&w.dy[k]), dz = _mm256_loadu_pd(&w.dz[k]);
+        const __m256d t = _mm256_cvtps_pd(_mm_loadu_ps(&w.tfar[k]));
+        const __m256d px = _mm256_fmadd_pd(t, dx, ox), py = _mm256_fmadd_pd(t, dy, oy), pz = _mm256_fmadd_pd(t, dz, oz);
+        refract4<Fresnel>(s, w, k, px, py, pz, _mm256_loadu_pd(&w.nx[k]), _mm256_loadu_pd(&w.ny[k]),
+                          _mm256_loadu_pd(&w.nz[k]), dx, dy, dz);
+    }
+}
+#endif
+
+// Every lane stepped as a hit on the dielectric (the caller drops the others). A height field's normal is
+// its bilinear gradient's (HeightField::sample_normal, one lane at a time, as the reference's).
+inline void step_dielectric(const IdealScene& s, Wave& w, std::size_t n) {
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+    static const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+    if (avx2) {
+        if (!s.heightfield) return s.fresnel ? step_sphere_avx2<true>(s, w, n) : step_sphere_avx2<false>(s, w, n);
+        for (std::size_t k = 0; k < n; ++k) {
+            if (w.geom[k] != s.dielectric_geom) continue;   // its lane is dropped after the step
+            const double t = w.tfar[k];
+            const glm::dvec3 normal = s.heightfield->sample_normal(w.ox[k] + t * w.dx[k], w.oy[k] + t * w.dy[k]);
+            w.nx[k] = normal.x, w.ny[k] = normal.y, w.nz[k] = normal.z;
+        }
+        return s.fresnel ? refract_heightfield_avx2<true>(s, w, n) : refract_heightfield_avx2<false>(s, w, n);
+    }
+#endif
+    step_sphere_scalar(s, w, n);   // not reached with a height field (supported())
+}
+
+// Batch b of a reference's photons: batches of kPhotonBatch per replica, replica after replica, as
+// compute_reference makes them.
+constexpr std::uint64_t kPhotonBatch = 65536;
+struct PhotonBatch {
+    std::uint32_t replica;
+    std::uint64_t first;   // the batch's first photon index within its replica
+    std::size_t n;
+    caustics::SamplerSeeds seeds;
+    PhotonBatch(std::uint64_t b, std::uint64_t batches_per_replica, std::uint64_t per_replica,
+                const caustics::ReferenceSettings& settings)
+        : replica(static_cast<std::uint32_t>(b / batches_per_replica)),
+          first((b % batches_per_replica) * kPhotonBatch),
+          n(static_cast<std::size_t>(std::min(per_replica, first + kPhotonBatch) - first)),
+          seeds(caustics::PhotonSampler::seeds(settings.sampler, settings.seed, replica)) {}
+};
+
+// A thread's buffers, kept from one run to the next (as the reference keeps its own, util/huge_pages.hpp):
+// fresh pages would cost a run a page fault each.
+struct ThreadBuffers {
+    std::vector<glm::dvec2> by_index, emission;
+    std::vector<std::uint32_t> order;
+    caustics::SortScratch scratch;
+    std::vector<glm::dvec3> origins, dirs;
+    std::vector<std::int64_t> bin_sums;
+    Wave w;
+};
+using Buffers = tbb::enumerable_thread_specific<ThreadBuffers>;
+
+// The reference's photons (settings.photons over settings.replicas, batches of 65,536) through the
+// idealised path; returns its time, rays and deposits.
+inline Result run(const IdealScene& s, const caustics::Emitter& emitter, const caustics::ReferenceSettings& settings,
+                  Buffers& buffers) {
+    using namespace caustics;
+    constexpr std::size_t kWave = 512;
+    const auto replicas = static_cast<std::uint64_t>(settings.replicas);
+    const std::uint64_t per_replica = (settings.photons + replicas - 1) / replicas;
+    const std::uint64_t batches = (per_replica + kPhotonBatch - 1) / kPhotonBatch;
+    const std::size_t bins = static_cast<std::size_t>(s.chart->width()) * s.chart->height();
+    struct Counts {
+        std::uint64_t rays = 0, deposited = 0;
+    };
+    const auto start = std::chrono::steady_clock::now();
+    const Counts total = tbb::parallel_reduce(
+        tbb::blocked_range<std::uint64_t>(0, batches * replicas, 1), Counts{},
+        [&](const tbb::blocked_range<std::uint64_t>& range, Counts acc) {
+            ThreadBuffers& t = buffers.local();
+            auto& [by_index, emission, order, scratch, origins, dirs, bin_sums, w] = t;
+            origins.resize(kWave), dirs.resize(kWave), bin_sums.resize(bins), w.resize(kWave);
+            for (std::uint64_t b = range.begin(); b < range.end(); ++b) {
+                const PhotonBatch batch(b, batches, per_replica, settings);
+                const auto [replica, first, n, seeds] = batch;
+                by_index.resize(n);
+                PhotonSampler::emissions(seeds, first, n, reinterpret_cast<double*>(by_index.data()));
+                photon_batch_order(1, first, by_index, order, scratch);
+                emission.resize(n);
+                for (std::size_t j = 0; j < n; ++j) emission[j] = by_index[order[j]];
+                for (std::size_t w0 = 0; w0 < n; w0 += kWave) {
+                    std::size_t live = std::min(kWave, n - w0);
+                    emitter.sample_many(emission.data() + w0, live, origins.data(), dirs.data());
+                    for (std::size_t k = 0; k < live; ++k) {
+                        w.ox[k] = origins[k].x, w.oy[k] = origins[k].y, w.oz[k] = origins[k].z;
+                        w.dx[k] = dirs[k].x, w.dy[k] = dirs[k].y, w.dz[k] = dirs[k].z;
+                        w.rng[k] = static_cast<std::uint32_t>((first + w0 + k) * 2654435761u) ^ replica;
+                        w.depth[k] = 0;
+                    }
+                    while (live > 0) {
+                        trace(s.scene, w, live);
+                        acc.rays += live;
+                        // Receiver hits deposit (after a specular event) before the step moves origins.
+                        for (std::size_t k = 0; k < live; ++k) {
+                            if (w.geom[k] != s.receiver_geom || w.depth[k] == 0) continue;
+                            const double tf = w.tfar[k];
+                            const int bin = s.chart->bin_of({w.ox[k] + tf * w.dx[k], w.oy[k] + tf * w.dy[k], w.oz[k] + tf * w.dz[k]});
+                            if (bin >= 0) ++bin_sums[static_cast<std::size_t>(bin)], ++acc.deposited;
+                        }
+                        step_dielectric(s, w, live);
+                        // The dielectric's hits go on; the rest end.
+                        std::size_t next = 0;
+                        for (std::size_t k = 0; k < live; ++k) {
+                            if (w.geom[k] != s.dielectric_geom || w.depth[k] + 1 > s.max_depth) continue;
+                            w.ox[next] = w.ox[k], w.oy[next] = w.oy[k], w.oz[next] = w.oz[k];
+                            w.dx[next] = w.dx[k], w.dy[next] = w.dy[k], w.dz[next] = w.dz[k];
+                            w.rng[next] = w.rng[k], w.depth[next] = w.depth[k] + 1;
+                            ++next;
+                        }
+                        live = next;
+                    }
+                }
+            }
+            acc.deposited += static_cast<std::uint64_t>(bin_sums[bins / 2] < 0);   // keep the sums alive
+            return acc;
+        },
+        [](Counts a, const Counts& b) {
+            a.rays += b.rays, a.deposited += b.deposited;
+            return a;
+        });
+    return {std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), total.rays,
+            total.deposited};
+}
+
+}  // namespace ideal
