@@ -108,47 +108,11 @@ inline void trace(RTCScene scene, Wave& w, std::size_t n) {
     }
 }
 
-// Every lane stepped as a sphere hit (lanes that are not are overwritten or dropped by the caller): the
-// refined distance, the outward normal, Snell's law, Fresnel by Russian roulette, the new ray. Lanes
-// n .. n rounded up to 4 are stepped too (the arrays hold a whole wave): harmless garbage.
-inline void step_sphere_scalar(const IdealScene& s, Wave& w, std::size_t n) {
-    for (std::size_t k = 0; k < n; ++k) {
-        const double ax = w.ox[k] - s.center.x, ay = w.oy[k] - s.center.y, az = w.oz[k] - s.center.z;
-        const double dx = w.dx[k], dy = w.dy[k], dz = w.dz[k];
-        const double a = dx * dx + dy * dy + dz * dz, b = ax * dx + ay * dy + az * dz;
-        const double c = ax * ax + ay * ay + az * az - s.radius * s.radius;
-        const double disc = b * b - a * c;
-        const double sq = std::sqrt(disc > 0.0 ? disc : 0.0);
-        const double q = b > 0.0 ? -(b + sq) : -(b - sq);
-        const double t0 = q / a, t1 = c / q, tf = w.tfar[k];
-        const double t = std::abs(t0 - tf) < std::abs(t1 - tf) ? t0 : t1;
-        const double px = w.ox[k] + t * dx, py = w.oy[k] + t * dy, pz = w.oz[k] + t * dz;
-        const double inv_r = 1.0 / s.radius;
-        double nx = (px - s.center.x) * inv_r, ny = (py - s.center.y) * inv_r, nz = (pz - s.center.z) * inv_r;
-        const double dn = dx * nx + dy * ny + dz * nz;
-        const bool outside = dn < 0.0;
-        const double sign = outside ? 1.0 : -1.0;
-        nx *= sign, ny *= sign, nz *= sign;
-        const double cos_i = -dn * sign;
-        const double n_i = outside ? 1.0 : s.ior, n_t = outside ? s.ior : 1.0, eta = n_i / n_t;
-        const double sin2_t = eta * eta * (1.0 - cos_i * cos_i), cos2_t = 1.0 - sin2_t;
-        const double cos_t = std::sqrt(cos2_t > 0.0 ? cos2_t : 0.0);
-        const double rs = (n_i * cos_i - n_t * cos_t) / (n_i * cos_i + n_t * cos_t);
-        const double rp = (n_t * cos_i - n_i * cos_t) / (n_t * cos_i + n_i * cos_t);
-        w.rng[k] = w.rng[k] * 1664525u + 1013904223u;
-        const double u = static_cast<double>(static_cast<std::int32_t>(w.rng[k] >> 8)) * 0x1.0p-24;
-        const bool reflect = sin2_t >= 1.0 || (s.fresnel && u < 0.5 * (rs * rs + rp * rp));
-        const double f = reflect ? 1.0 : eta, g = reflect ? 2.0 * cos_i : eta * cos_i - cos_t;
-        const double ex = f * dx + g * nx, ey = f * dy + g * ny, ez = f * dz + g * nz;
-        const double inv = 1.0 / std::sqrt(ex * ex + ey * ey + ez * ez);
-        w.dx[k] = ex * inv, w.dy[k] = ey * inv, w.dz[k] = ez * inv;
-        w.ox[k] = px, w.oy[k] = py, w.oz[k] = pz;
-    }
-}
-
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-// The same step, four lanes per AVX2 vector with FMA (hand-vectorised: the bound should not depend on
-// what the compiler's vectoriser makes of the branches).
+// The dielectric's hits, four lanes per AVX2 vector with FMA, by hand: the bound should not depend on
+// what the compiler's vectoriser makes of the branches. Lanes n .. n rounded up to 4 are stepped too
+// (the arrays hold a whole wave): harmless garbage, dropped with the other lanes that did not hit the
+// dielectric.
 __attribute__((target("avx2,fma"))) inline __m256d dot(__m256d ax, __m256d ay, __m256d az, __m256d bx, __m256d by,
                                                         __m256d bz) {
     return _mm256_fmadd_pd(ax, bx, _mm256_fmadd_pd(ay, by, _mm256_mul_pd(az, bz)));
@@ -239,22 +203,19 @@ __attribute__((target("avx2,fma"))) inline void refract_heightfield_avx2(const I
 #endif
 
 // Every lane stepped as a hit on the dielectric (the caller drops the others). A height field's normal is
-// its bilinear gradient's (HeightField::sample_normal, one lane at a time, as the reference's).
+// its bilinear gradient's (HeightField::sample_normal, one lane at a time, as the reference's). Only
+// where supported().
 inline void step_dielectric(const IdealScene& s, Wave& w, std::size_t n) {
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-    static const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-    if (avx2) {
-        if (!s.heightfield) return s.fresnel ? step_sphere_avx2<true>(s, w, n) : step_sphere_avx2<false>(s, w, n);
-        for (std::size_t k = 0; k < n; ++k) {
-            if (w.geom[k] != s.dielectric_geom) continue;   // its lane is dropped after the step
-            const double t = w.tfar[k];
-            const glm::dvec3 normal = s.heightfield->sample_normal(w.ox[k] + t * w.dx[k], w.oy[k] + t * w.dy[k]);
-            w.nx[k] = normal.x, w.ny[k] = normal.y, w.nz[k] = normal.z;
-        }
-        return s.fresnel ? refract_heightfield_avx2<true>(s, w, n) : refract_heightfield_avx2<false>(s, w, n);
+    if (!s.heightfield) return s.fresnel ? step_sphere_avx2<true>(s, w, n) : step_sphere_avx2<false>(s, w, n);
+    for (std::size_t k = 0; k < n; ++k) {
+        if (w.geom[k] != s.dielectric_geom) continue;   // its lane is dropped after the step
+        const double t = w.tfar[k];
+        const glm::dvec3 normal = s.heightfield->sample_normal(w.ox[k] + t * w.dx[k], w.oy[k] + t * w.dy[k]);
+        w.nx[k] = normal.x, w.ny[k] = normal.y, w.nz[k] = normal.z;
     }
+    s.fresnel ? refract_heightfield_avx2<true>(s, w, n) : refract_heightfield_avx2<false>(s, w, n);
 #endif
-    step_sphere_scalar(s, w, n);   // not reached with a height field (supported())
 }
 
 // Batch b of a reference's photons: batches of kPhotonBatch per replica, replica after replica, as
@@ -286,7 +247,7 @@ struct ThreadBuffers {
 using Buffers = tbb::enumerable_thread_specific<ThreadBuffers>;
 
 // The reference's photons (settings.photons over settings.replicas, batches of 65,536) through the
-// idealised path; returns its time, rays and deposits.
+// idealised path; returns its time, rays and deposits. Only where supported().
 inline Result run(const IdealScene& s, const caustics::Emitter& emitter, const caustics::ReferenceSettings& settings,
                   Buffers& buffers) {
     using namespace caustics;
