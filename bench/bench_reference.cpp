@@ -326,55 +326,6 @@ double generate_photons(const Emitter& emitter, const ReferenceSettings& setting
     return seconds;
 }
 
-// The idealised path's scene (ideal_path.hpp) where the scene is one dielectric (an exact sphere or
-// a height field, without absorption, scattering or dispersion) among diffuse objects, lit by one light,
-// without a medium: `sphere` and `pool`. Otherwise scene == nullptr.
-ideal::IdealScene ideal_scene_of(BenchScene& bs) {
-    ideal::IdealScene s;
-    const Scene& sc = bs.scene;
-    if (!ideal::supported() || sc.lights.size() != 1 || sc.medium.present) return s;
-    int dielectric = -1;
-    for (std::size_t i = 0; i < sc.objects.size(); ++i) {
-        const Material& m = sc.objects[i].material;
-        if (m.type == MaterialType::Dielectric) {
-            if (dielectric >= 0 || m.absorption != 0.0 || m.scattering != 0.0 || m.dispersion != 0.0) return s;
-            dielectric = static_cast<int>(i);
-        } else if (m.type != MaterialType::Diffuse) {
-            return s;
-        }
-        const ObjectInstance& inst = bs.frame->objects[i];
-        if (!inst.analytic_sphere && inst.mesh.empty()) return s;   // geometry ids would not be object indices
-    }
-    if (dielectric < 0) return s;
-    const ObjectInstance& inst = bs.frame->objects[static_cast<std::size_t>(dielectric)];
-    if (!inst.analytic_sphere && !inst.heightfield) return s;
-    // RayTracer attaches one geometry per object, in order: check it with a ray down onto the dielectric.
-    auto* embree = static_cast<RTCScene>(bs.tracer->embree_scene());
-    const glm::dvec3 top = 0.5 * (inst.bounds.lo + inst.bounds.hi) +
-                           glm::dvec3(0.0, 0.0, inst.bounds.hi.z - inst.bounds.lo.z + 1.0);
-    const Hit probe = bs.tracer->intersect(top, {0.0, 0.0, -1.0}, 0.0, 1e30);
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    RTCRayHit rh;
-    rh.ray = {static_cast<float>(top.x), static_cast<float>(top.y), static_cast<float>(top.z), 0.0f,
-              0.0f, 0.0f, -1.0f, 0.0f, 1e30f, 0xFFFFFFFFu, 0u, 0u};
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(embree, &context, &rh);
-    if (!probe.valid || probe.object != dielectric || rh.hit.geomID != static_cast<unsigned>(dielectric)) return s;
-    s.scene = embree;
-    s.dielectric_geom = static_cast<unsigned>(dielectric);
-    s.receiver_geom = static_cast<unsigned>(sc.receiver.object_index);
-    s.heightfield = inst.heightfield.get();
-    s.center = inst.object->center;
-    s.radius = inst.object->radius;
-    s.ior = inst.object->material.ior;
-    s.fresnel = sc.fresnel;
-    s.max_depth = static_cast<std::uint32_t>(sc.max_specular_depth);
-    s.chart = bs.chart.get();
-    return s;
-}
-
 // Each iteration runs the reference and then replays its rays in every mode, back to back, so that all
 // see the same machine conditions; the reported time is the reference's.
 void BM_ReferenceVsEmbree(benchmark::State& state) {
@@ -399,7 +350,7 @@ void BM_ReferenceVsEmbree(benchmark::State& state) {
     for (int m = 0; m < kQueryModes; ++m) replay_tracer(*bs.tracer, by_segment, static_cast<QueryMode>(m));
     if (one_light) generate_photons(emitter, settings);
     // The idealised path on `pool` and `sphere` without the camera view (ideal_path.hpp).
-    const ideal::IdealScene ideal_scene = camera ? ideal::IdealScene{} : ideal_scene_of(bs);
+    const ideal::IdealScene ideal_scene = camera ? ideal::IdealScene{} : ideal::scene_of(bs.scene, *bs.frame, *bs.tracer, *bs.chart);
     const bool with_ideal = ideal_scene.scene != nullptr;
     ideal::Result ideal_run;
     ideal::Buffers ideal_buffers;
@@ -449,8 +400,9 @@ void BM_ReferenceVsEmbree(benchmark::State& state) {
         state.counters["ceiling_tracer_generation"] = replay_median[anchor] / (tracer + generation);
     }
     if (with_ideal) {
-        // The idealised path traces its own rays (the same photons; its Russian roulette draws differ),
-        // about as many as the reference's: ideal_rays_per_photon says how close.
+        // The idealised path traces the same photons on its own: where the scene makes no Fresnel choices
+        // (its LCG draws them, not the reference's Sobol' dimensions) they take the reference's paths, and
+        // its rays and deposits per photon equal the reference's.
         state.counters["ideal_over_anchor"] = median(ideal_s) / replay_median[anchor];
         state.counters["ceiling_ideal"] = replay_median[anchor] / median(ideal_s);
         state.counters["ideal_rays_per_photon"] = static_cast<double>(ideal_run.rays) / settings.photons;
@@ -468,7 +420,7 @@ void BM_ReferenceVsEmbree(benchmark::State& state) {
 // The idealised path alone (ideal_path.hpp), on `pool` (0) and `sphere` (1): for profiles.
 void BM_IdealPath(benchmark::State& state) {
     BenchScene& bs = BenchScene::get(static_cast<std::size_t>(state.range(0)));
-    const ideal::IdealScene scene = ideal_scene_of(bs);
+    const ideal::IdealScene scene = ideal::scene_of(bs.scene, *bs.frame, *bs.tracer, *bs.chart);
     if (!scene.scene) {
         state.SkipWithError("not a scene the idealised path models, or a CPU without AVX2 and FMA");
         return;

@@ -32,10 +32,13 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_reduce.h>
 
+#include <caustics/frame/frame.hpp>
+#include <caustics/frame/ray_tracer.hpp>
 #include <caustics/frame/receiver_chart.hpp>
 #include <caustics/reference/photon_sampler.hpp>
 #include <caustics/reference/photon_source.hpp>
 #include <caustics/reference/reference.hpp>
+#include <caustics/scene/scene.hpp>
 
 namespace ideal {
 
@@ -61,6 +64,56 @@ inline bool supported() {
 #else
     return false;
 #endif
+}
+
+// The idealised path's scene where the scene is one dielectric (an exact sphere or
+// a height field, without absorption, scattering or dispersion) among diffuse objects, lit by one light,
+// without a medium: `sphere` and `pool`. Otherwise scene == nullptr.
+inline IdealScene scene_of(const caustics::Scene& sc, const caustics::FrameGeometry& frame,
+                           const caustics::RayTracer& tracer, const caustics::ReceiverChart& chart) {
+    using namespace caustics;
+    IdealScene s;
+    if (!supported() || sc.lights.size() != 1 || sc.medium.present) return s;
+    int dielectric = -1;
+    for (std::size_t i = 0; i < sc.objects.size(); ++i) {
+        const Material& m = sc.objects[i].material;
+        if (m.type == MaterialType::Dielectric) {
+            if (dielectric >= 0 || m.absorption != 0.0 || m.scattering != 0.0 || m.dispersion != 0.0) return s;
+            dielectric = static_cast<int>(i);
+        } else if (m.type != MaterialType::Diffuse) {
+            return s;
+        }
+        const ObjectInstance& inst = frame.objects[i];
+        if (!inst.analytic_sphere && inst.mesh.empty()) return s;   // geometry ids would not be object indices
+    }
+    if (dielectric < 0) return s;
+    const ObjectInstance& inst = frame.objects[static_cast<std::size_t>(dielectric)];
+    if (!inst.analytic_sphere && !inst.heightfield) return s;
+    // RayTracer attaches one geometry per object, in order: check it with a ray down onto the dielectric.
+    auto* embree = static_cast<RTCScene>(tracer.embree_scene());
+    const glm::dvec3 top = 0.5 * (inst.bounds.lo + inst.bounds.hi) +
+                           glm::dvec3(0.0, 0.0, inst.bounds.hi.z - inst.bounds.lo.z + 1.0);
+    const Hit probe = tracer.intersect(top, {0.0, 0.0, -1.0}, 0.0, 1e30);
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRayHit rh;
+    rh.ray = {static_cast<float>(top.x), static_cast<float>(top.y), static_cast<float>(top.z), 0.0f,
+              0.0f, 0.0f, -1.0f, 0.0f, 1e30f, 0xFFFFFFFFu, 0u, 0u};
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(embree, &context, &rh);
+    if (!probe.valid || probe.object != dielectric || rh.hit.geomID != static_cast<unsigned>(dielectric)) return s;
+    s.scene = embree;
+    s.dielectric_geom = static_cast<unsigned>(dielectric);
+    s.receiver_geom = static_cast<unsigned>(sc.receiver.object_index);
+    s.heightfield = inst.heightfield.get();
+    s.center = inst.object->center;
+    s.radius = inst.object->radius;
+    s.ior = inst.object->material.ior;
+    s.fresnel = sc.fresnel;
+    s.max_depth = static_cast<std::uint32_t>(sc.max_specular_depth);
+    s.chart = &chart;
+    return s;
 }
 
 struct Result {
@@ -307,7 +360,6 @@ inline Result run(const IdealScene& s, const caustics::Emitter& emitter, const c
                     }
                 }
             }
-            acc.deposited += static_cast<std::uint64_t>(bin_sums[bins / 2] < 0);   // keep the sums alive
             return acc;
         },
         [](Counts a, const Counts& b) {
