@@ -242,7 +242,11 @@ struct RayTracer::Impl {
     // The Hit of one ray from Embree's raw answer: one code path for single and packet queries, so
     // that both give the same bits. Written into `out` field by field: a returned Hit was copied in
     // 16-byte pieces from a temporary just written in 8-byte ones, a store-forwarding stall per hit.
-    void complete(const glm::dvec3& origin, const glm::dvec3& dir, const RawHit& raw, Hit& out) const;
+    // With `later` set, a height field's shading normal is left to later.finish(), which computes a
+    // group's together (HeightField::sample_normals, the same bits as one at a time).
+    struct HeightFieldNormals;
+    void complete(const glm::dvec3& origin, const glm::dvec3& dir, const RawHit& raw, Hit& out,
+                  HeightFieldNormals* later = nullptr) const;
     // Throws on a ray Embree would abort on; tmin is the query's as Embree gets it (at least min_tmin).
     void check(const RayQuery& q, double tmin, const char* what) const {
         if (!valid_ray(q.origin, q.dir, tmin, q.tmax)) [[unlikely]]
@@ -351,7 +355,44 @@ Hit RayTracer::intersect(const glm::dvec3& origin, const glm::dvec3& dir, double
     return hit;
 }
 
-void RayTracer::Impl::complete(const glm::dvec3& origin, const glm::dvec3& dir, const RawHit& raw, Hit& out) const {
+// A group's height-field hits, waiting for their shading normals.
+struct RayTracer::Impl::HeightFieldNormals {
+    int count = 0;
+    const HeightField* field[kGroup];
+    Hit* hit[kGroup];
+    void add(const HeightField* f, Hit& h) {
+        field[count] = f;
+        hit[count++] = &h;
+    }
+    // Each field's hits in one call; then, as complete() does for one hit, the shading normal turned to
+    // the geometric normal's side.
+    void finish() {
+        for (int i = 0; i < count; ++i) {
+            const HeightField* f = field[i];
+            if (!f) continue;
+            double x[kGroup], y[kGroup], nx[kGroup], ny[kGroup], nz[kGroup];
+            Hit* of[kGroup];
+            int n = 0;
+            for (int j = i; j < count; ++j) {
+                if (field[j] != f) continue;
+                of[n] = hit[j];
+                x[n] = hit[j]->position.x, y[n] = hit[j]->position.y;
+                ++n;
+                field[j] = nullptr;
+            }
+            f->sample_normals(x, y, static_cast<std::size_t>(n), nx, ny, nz);
+            for (int k = 0; k < n; ++k) {
+                glm::dvec3 shading(nx[k], ny[k], nz[k]);
+                if (glm::dot(shading, of[k]->geometric_normal) < 0.0) shading = -shading;
+                of[k]->shading_normal = shading;
+            }
+        }
+        count = 0;
+    }
+};
+
+void RayTracer::Impl::complete(const glm::dvec3& origin, const glm::dvec3& dir, const RawHit& raw, Hit& out,
+                               HeightFieldNormals* later) const {
     const GeometryInfo& info = geometries[raw.geom_id];
     const ObjectInstance& inst = *info.instance;
     double t = raw.tfar;
@@ -385,6 +426,15 @@ void RayTracer::Impl::complete(const glm::dvec3& origin, const glm::dvec3& dir, 
         geometric_normal = len > 0.0 ? (ng_sign / len) * ng : glm::dvec3(0.0, 0.0, 1.0);
         position = origin + t * dir;
 
+        if (inst.heightfield && later) {
+            out.valid = true;
+            out.object = info.object;
+            out.t = t;
+            out.position = position;
+            out.geometric_normal = geometric_normal;
+            later->add(inst.heightfield.get(), out);
+            return;
+        }
         if (inst.heightfield) {
             shading_normal = inst.heightfield->sample_normal(position.x, position.y);
         } else if (!info.corner_normals.empty()) {
@@ -521,14 +571,16 @@ void RayTracer::Impl::visibility_packet(const RayQuery* queries, int count, std:
 
 void RayTracer::intersect(const RayQuery* queries, std::size_t n, Hit* hits, QueryMode mode) const {
     RawHit raw[kGroup];
+    Impl::HeightFieldNormals later;
     for (std::size_t first = 0; first < n; first += kGroup) {
         const int count = static_cast<int>(std::min<std::size_t>(kGroup, n - first));
         impl_->raw_hits(queries + first, count, mode, raw);   // prefetches the shading-normal records
         for (int k = 0; k < count; ++k) {
             const RayQuery& q = queries[first + k];
             if (raw[k].geom_id == RTC_INVALID_GEOMETRY_ID) hits[first + k] = Hit{};
-            else impl_->complete(q.origin, q.dir, raw[k], hits[first + k]);
+            else impl_->complete(q.origin, q.dir, raw[k], hits[first + k], &later);
         }
+        later.finish();
     }
 }
 

@@ -30,6 +30,7 @@ namespace {
         if (!(g < cells)) g = 0.0;  // fmod rounding up to exactly `cells`
     } else {
         g = std::clamp(g, 0.0, static_cast<double>(cells));
+        if (!(g >= 0.0)) g = 0.0;   // NaN: a cell, not an index out of range
     }
     // g >= 0 here (NaN aside), so truncation is floor, without a libm call.
     i0 = std::min(static_cast<int>(g), cells - 1);
