@@ -7,7 +7,7 @@
 // emission. It uses the same scene in Embree (16-ray packets, coherent) and the physics the reference
 // applies on these scenes:
 // - the dielectric's hit: the exact ray-sphere distance, or the height field's bilinear normal
-//   (HeightField::sample_normal, one lane at a time, for the dielectric's hits only);
+//   (HeightField::sample_normals, four lanes at a time, as the reference's);
 // - Snell's law and total internal reflection;
 // - Fresnel by Russian roulette where the scene asks (Scene::fresnel; neither scene does);
 // - the deposit on the receiver's bins after a specular event; any other diffuse hit ends the photon.
@@ -125,12 +125,13 @@ struct Result {
 // A wave's photons, one array per coordinate.
 struct Wave {
     std::vector<double> ox, oy, oz, dx, dy, dz, nx, ny, nz;   // n: a height-field hit's normal
-    std::vector<std::uint32_t> rng, depth;
+    std::vector<double> hx, hy, px, py, pz;                  // the height field's hits packed: x, y, normal
+    std::vector<std::uint32_t> rng, depth, lane;             // lane: a packed hit's lane
     std::vector<float> tfar;
     std::vector<unsigned> geom;
     void resize(std::size_t n) {
-        for (auto* v : {&ox, &oy, &oz, &dx, &dy, &dz, &nx, &ny, &nz}) v->resize(n);
-        rng.resize(n), depth.resize(n), tfar.resize(n), geom.resize(n);
+        for (auto* v : {&ox, &oy, &oz, &dx, &dy, &dz, &nx, &ny, &nz, &hx, &hy, &px, &py, &pz}) v->resize(n);
+        rng.resize(n), depth.resize(n), lane.resize(n), tfar.resize(n), geom.resize(n);
     }
 };
 
@@ -256,16 +257,23 @@ __attribute__((target("avx2,fma"))) inline void refract_heightfield_avx2(const I
 #endif
 
 // Every lane stepped as a hit on the dielectric (the caller drops the others). A height field's normal is
-// its bilinear gradient's (HeightField::sample_normal, one lane at a time, as the reference's). Only
+// its bilinear gradient's (HeightField::sample_normals, four lanes at a time, as the reference's). Only
 // where supported().
 inline void step_dielectric(const IdealScene& s, Wave& w, std::size_t n) {
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
     if (!s.heightfield) return s.fresnel ? step_sphere_avx2<true>(s, w, n) : step_sphere_avx2<false>(s, w, n);
+    // The dielectric's hits only, packed, then their normals back to their lanes.
+    std::size_t m = 0;
     for (std::size_t k = 0; k < n; ++k) {
-        if (w.geom[k] != s.dielectric_geom) continue;   // its lane is dropped after the step
         const double t = w.tfar[k];
-        const glm::dvec3 normal = s.heightfield->sample_normal(w.ox[k] + t * w.dx[k], w.oy[k] + t * w.dy[k]);
-        w.nx[k] = normal.x, w.ny[k] = normal.y, w.nz[k] = normal.z;
+        w.lane[m] = static_cast<std::uint32_t>(k);
+        w.hx[m] = w.ox[k] + t * w.dx[k], w.hy[m] = w.oy[k] + t * w.dy[k];
+        m += w.geom[k] == s.dielectric_geom;
+    }
+    s.heightfield->sample_normals(w.hx.data(), w.hy.data(), m, w.px.data(), w.py.data(), w.pz.data());
+    for (std::size_t j = 0; j < m; ++j) {
+        const std::uint32_t k = w.lane[j];
+        w.nx[k] = w.px[j], w.ny[k] = w.py[j], w.nz[k] = w.pz[j];
     }
     s.fresnel ? refract_heightfield_avx2<true>(s, w, n) : refract_heightfield_avx2<false>(s, w, n);
 #endif

@@ -30,6 +30,7 @@
 #include <embree3/rtcore.h>
 
 #include <caustics/frame/ray_offset.hpp>
+#include <caustics/frame/sphere_hits.hpp>
 #include <caustics/util/huge_pages.hpp>
 
 namespace caustics {
@@ -242,11 +243,12 @@ struct RayTracer::Impl {
     // The Hit of one ray from Embree's raw answer: one code path for single and packet queries, so
     // that both give the same bits. Written into `out` field by field: a returned Hit was copied in
     // 16-byte pieces from a temporary just written in 8-byte ones, a store-forwarding stall per hit.
-    // With `later` set, a height field's shading normal is left to later.finish(), which computes a
-    // group's together (HeightField::sample_normals, the same bits as one at a time).
-    struct HeightFieldNormals;
+    // With `later` set, a sphere's exact hit and a height field's shading normal are left to
+    // later.finish(), which computes a group's together (exact_sphere_hits and
+    // HeightField::sample_normals: the same bits as one at a time).
+    struct Later;
     void complete(const glm::dvec3& origin, const glm::dvec3& dir, const RawHit& raw, Hit& out,
-                  HeightFieldNormals* later = nullptr) const;
+                  Later* later = nullptr) const;
     // Throws on a ray Embree would abort on; tmin is the query's as Embree gets it (at least min_tmin).
     void check(const RayQuery& q, double tmin, const char* what) const {
         if (!valid_ray(q.origin, q.dir, tmin, q.tmax)) [[unlikely]]
@@ -355,28 +357,69 @@ Hit RayTracer::intersect(const glm::dvec3& origin, const glm::dvec3& dir, double
     return hit;
 }
 
-// A group's height-field hits, waiting for their shading normals.
-struct RayTracer::Impl::HeightFieldNormals {
-    int count = 0;
+// A group's sphere and height-field hits, waiting for the rest of their completion.
+struct RayTracer::Impl::Later {
+    int spheres = 0, fields = 0;
+    const Object* sphere[kGroup];
     const HeightField* field[kGroup];
-    Hit* hit[kGroup];
-    void add(const HeightField* f, Hit& h) {
-        field[count] = f;
-        hit[count++] = &h;
+    const glm::dvec3 *origin[kGroup], *dir[kGroup];
+    Hit* sphere_hit[kGroup];
+    Hit* field_hit[kGroup];
+    void add_sphere(const Object* o, const glm::dvec3& org, const glm::dvec3& d, Hit& h) {
+        sphere[spheres] = o;
+        origin[spheres] = &org, dir[spheres] = &d;
+        sphere_hit[spheres++] = &h;
+    }
+    void add_field(const HeightField* f, Hit& h) {
+        field[fields] = f;
+        field_hit[fields++] = &h;
+    }
+    void finish() {
+        finish_spheres();
+        finish_fields();
+    }
+    // Each sphere's hits in one call (hit.t holds Embree's distance until then).
+    void finish_spheres() {
+        for (int i = 0; i < spheres; ++i) {
+            const Object* o = sphere[i];
+            if (!o) continue;
+            double ox[kGroup], oy[kGroup], oz[kGroup], dx[kGroup], dy[kGroup], dz[kGroup], t[kGroup];
+            double px[kGroup], py[kGroup], pz[kGroup], nx[kGroup], ny[kGroup], nz[kGroup];
+            Hit* of[kGroup];
+            int n = 0;
+            for (int j = i; j < spheres; ++j) {
+                if (sphere[j] != o) continue;
+                of[n] = sphere_hit[j];
+                ox[n] = origin[j]->x, oy[n] = origin[j]->y, oz[n] = origin[j]->z;
+                dx[n] = dir[j]->x, dy[n] = dir[j]->y, dz[n] = dir[j]->z;
+                t[n] = sphere_hit[j]->t;
+                ++n;
+                sphere[j] = nullptr;
+            }
+            exact_sphere_hits(o->center, o->radius, static_cast<std::size_t>(n),
+                              {ox, oy, oz, dx, dy, dz, t, px, py, pz, nx, ny, nz});
+            for (int k = 0; k < n; ++k) {
+                Hit& h = *of[k];
+                h.t = t[k];
+                h.position = {px[k], py[k], pz[k]};
+                h.geometric_normal = h.shading_normal = {nx[k], ny[k], nz[k]};
+            }
+        }
+        spheres = 0;
     }
     // Each field's hits in one call; then, as complete() does for one hit, the shading normal turned to
     // the geometric normal's side.
-    void finish() {
-        for (int i = 0; i < count; ++i) {
+    void finish_fields() {
+        for (int i = 0; i < fields; ++i) {
             const HeightField* f = field[i];
             if (!f) continue;
             double x[kGroup], y[kGroup], nx[kGroup], ny[kGroup], nz[kGroup];
             Hit* of[kGroup];
             int n = 0;
-            for (int j = i; j < count; ++j) {
+            for (int j = i; j < fields; ++j) {
                 if (field[j] != f) continue;
-                of[n] = hit[j];
-                x[n] = hit[j]->position.x, y[n] = hit[j]->position.y;
+                of[n] = field_hit[j];
+                x[n] = field_hit[j]->position.x, y[n] = field_hit[j]->position.y;
                 ++n;
                 field[j] = nullptr;
             }
@@ -387,12 +430,12 @@ struct RayTracer::Impl::HeightFieldNormals {
                 of[k]->shading_normal = shading;
             }
         }
-        count = 0;
+        fields = 0;
     }
 };
 
 void RayTracer::Impl::complete(const glm::dvec3& origin, const glm::dvec3& dir, const RawHit& raw, Hit& out,
-                               HeightFieldNormals* later) const {
+                               Later* later) const {
     const GeometryInfo& info = geometries[raw.geom_id];
     const ObjectInstance& inst = *info.instance;
     double t = raw.tfar;
@@ -400,23 +443,17 @@ void RayTracer::Impl::complete(const glm::dvec3& origin, const glm::dvec3& dir, 
 
     if (inst.analytic_sphere) {
         // Exact ray-sphere distance in double, the root nearest Embree's float answer.
-        const Object& obj = *inst.object;
-        const glm::dvec3 oc = origin - obj.center;
-        const double a = glm::dot(dir, dir);
-        const double b = glm::dot(oc, dir);
-        const double c = glm::dot(oc, oc) - obj.radius * obj.radius;
-        const double disc = b * b - a * c;
-        if (disc >= 0.0) {
-            const double s = std::sqrt(disc);
-            // Numerically stable pair of roots.
-            const double q = b > 0.0 ? -(b + s) : -(b - s);
-            double t0 = q / a, t1 = q != 0.0 ? c / q : t0;
-            if (t0 > t1) std::swap(t0, t1);
-            const double refined = std::abs(t0 - t) < std::abs(t1 - t) ? t0 : t1;
-            if (refined > 0.0) t = refined;
+        if (later) {
+            out.valid = true;
+            out.object = info.object;
+            out.t = t;
+            later->add_sphere(inst.object, origin, dir, out);
+            return;
         }
-        position = origin + t * dir;
-        geometric_normal = glm::normalize(position - obj.center);
+        const SphereHit h = exact_sphere_hit(inst.object->center, inst.object->radius, origin, dir, t);
+        t = h.t;
+        position = h.position;
+        geometric_normal = h.normal;
         shading_normal = geometric_normal;
     } else {
         // Embree's Ng is computed from the triangle it just tested (no extra memory traffic); its sign
@@ -432,7 +469,7 @@ void RayTracer::Impl::complete(const glm::dvec3& origin, const glm::dvec3& dir, 
             out.t = t;
             out.position = position;
             out.geometric_normal = geometric_normal;
-            later->add(inst.heightfield.get(), out);
+            later->add_field(inst.heightfield.get(), out);
             return;
         }
         if (inst.heightfield) {
@@ -571,7 +608,7 @@ void RayTracer::Impl::visibility_packet(const RayQuery* queries, int count, std:
 
 void RayTracer::intersect(const RayQuery* queries, std::size_t n, Hit* hits, QueryMode mode) const {
     RawHit raw[kGroup];
-    Impl::HeightFieldNormals later;
+    Impl::Later later;
     for (std::size_t first = 0; first < n; first += kGroup) {
         const int count = static_cast<int>(std::min<std::size_t>(kGroup, n - first));
         impl_->raw_hits(queries + first, count, mode, raw);   // prefetches the shading-normal records
