@@ -24,11 +24,13 @@
 // BM_PhotonGeneration/scene: the generation alone, with each stage's share of its thread time.
 // BM_TracerBatches/scene/mode:{0 single, 1 packet8, 2 packet16}: RayTracer's batches alone on the recorded
 //                       rays; over_embree: their time over bare Embree's in the same mode, same rays.
-//   ideal_over_anchor, ceiling_ideal  (pool and sphere without the camera view) the idealised path of
-//                       ideal_path.hpp on the same photons, over the anchor / the anchor over it:
+//   ideal_over_anchor, ceiling_ideal  (pool and sphere, with and without the camera view) the idealised
+//                       path of ideal_path.hpp on the same photons, over the anchor / the anchor over it:
 //                       what a hand-vectorised structure-of-arrays transport without the reference's
-//                       generality reaches; ideal_rays_per_photon and ideal_deposits_per_photon against
-//                       rays_per_photon and deposits_per_photon show that it traces the same paths
+//                       generality reaches; ideal_rays_per_photon (without the visibility rays),
+//                       ideal_deposits_per_photon and ideal_shadow_rays_per_photon against the
+//                       reference's rays, deposits and shadow_rays_per_photon show that it traces the same
+//                       paths
 // BM_IdealPath/scene:{0 pool, 1 sphere}: the idealised path alone (for profiles).
 // BM_Reference/scene/camera: compute_reference alone (for profiles: perf record -g ... --benchmark_filter=BM_Reference/).
 //
@@ -349,8 +351,10 @@ void BM_ReferenceVsEmbree(benchmark::State& state) {
     const Emitter emitter = one_light ? make_emitter(bs.scene.lights[0], *bs.frame) : Emitter{};
     for (int m = 0; m < kQueryModes; ++m) replay_tracer(*bs.tracer, by_segment, static_cast<QueryMode>(m));
     if (one_light) generate_photons(emitter, settings);
-    // The idealised path on `pool` and `sphere` without the camera view (ideal_path.hpp).
-    const ideal::IdealScene ideal_scene = camera ? ideal::IdealScene{} : ideal::scene_of(bs.scene, *bs.frame, *bs.tracer, *bs.chart);
+    // The idealised path on `pool` and `sphere` (ideal_path.hpp), with the camera view where it is measured.
+    ideal::IdealScene ideal_scene = ideal::scene_of(bs.scene, *bs.frame, *bs.tracer, *bs.chart);
+    const CameraModel camera_model(bs.scene.camera);
+    if (camera) ideal::with_camera(ideal_scene, camera_model, bs.gbuffer, *bs.frame);
     const bool with_ideal = ideal_scene.scene != nullptr;
     ideal::Result ideal_run;
     ideal::Buffers ideal_buffers;
@@ -407,6 +411,7 @@ void BM_ReferenceVsEmbree(benchmark::State& state) {
         state.counters["ceiling_ideal"] = replay_median[anchor] / median(ideal_s);
         state.counters["ideal_rays_per_photon"] = static_cast<double>(ideal_run.rays) / settings.photons;
         state.counters["ideal_deposits_per_photon"] = static_cast<double>(ideal_run.deposited) / settings.photons;
+        state.counters["ideal_shadow_rays_per_photon"] = static_cast<double>(ideal_run.shadow_rays) / settings.photons;
         state.counters["deposits_per_photon"] = static_cast<double>(last.sums->ledger_units.deposited_receiver) /
                                                 std::max(1e-300, last.sums->ledger_units.emitted);
     }

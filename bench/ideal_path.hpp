@@ -12,14 +12,21 @@
 // - Fresnel by Russian roulette where the scene asks (Scene::fresnel; neither scene does);
 // - the deposit on the receiver's bins after a specular event; any other diffuse hit ends the photon.
 //
+// - with the camera view (with_camera), the reference's camera deposit of every diffuse hit after a
+//   specular event: the pixel, the G-buffer's object, the sides and the cosine, then a visibility ray
+//   towards the pinhole (16-ray packets), into pixel sums private to each thread.
+//
 // What it leaves out, each in its favour:
-// - the flux ledger, media, the camera view and dispersion;
+// - the flux ledger, media and dispersion;
+// - the camera pixels' footprint table, built once outside the timed runs (the reference builds it per
+//   run);
 // - the generality of materials and objects (one dielectric, diffuse objects otherwise);
 // - a 32-bit LCG per photon in place of the Sobol' draw of each Fresnel choice;
 // - bins private to each thread (no atomic adds), never cleared;
 // - every check the reference makes.
 //
 // Each wave's dielectric hits are stepped four lanes at a time, by hand with AVX2 and FMA.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -32,7 +39,9 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_reduce.h>
 
+#include <caustics/frame/camera.hpp>
 #include <caustics/frame/frame.hpp>
+#include <caustics/frame/ray_offset.hpp>
 #include <caustics/frame/ray_tracer.hpp>
 #include <caustics/frame/receiver_chart.hpp>
 #include <caustics/reference/photon_sampler.hpp>
@@ -44,6 +53,14 @@ namespace ideal {
 
 // One dielectric (an exact sphere or a height field's triangles) and diffuse objects, one of them the
 // receiver: what `sphere` and `pool` are.
+// The camera view: the pinhole, the G-buffer and each pixel's footprint (reference.cpp's pixel table).
+struct IdealCamera {
+    const caustics::CameraModel* model = nullptr;
+    const caustics::CameraGBuffer* gbuffer = nullptr;
+    std::vector<double> scale;   // max(d^2, 1e-12) / clamp(cos, 0.05, 1) per covered pixel
+    double shadow_tmin = 0.0;    // the tracer's minimum tnear (scene_ray_offset)
+};
+
 struct IdealScene {
     RTCScene scene = nullptr;
     unsigned dielectric_geom = RTC_INVALID_GEOMETRY_ID;     // the dielectric's geometry id
@@ -55,6 +72,7 @@ struct IdealScene {
     bool fresnel = false;   // Scene::fresnel: Russian roulette on Fresnel's reflectance, else TIR only
     std::uint32_t max_depth = 8;   // Scene::max_specular_depth
     const caustics::ReceiverChart* chart = nullptr;
+    IdealCamera camera;   // model null: no camera view
 };
 
 // The idealised path is hand-vectorised for AVX2 and FMA only.
@@ -116,10 +134,28 @@ inline IdealScene scene_of(const caustics::Scene& sc, const caustics::FrameGeome
     return s;
 }
 
+// Adds the camera view to an idealised scene: the pixel table as compute_reference makes it.
+inline void with_camera(IdealScene& s, const caustics::CameraModel& model, const caustics::CameraGBuffer& gbuffer,
+                        const caustics::FrameGeometry& frame) {
+    IdealCamera& c = s.camera;
+    c.model = &model;
+    c.gbuffer = &gbuffer;
+    c.shadow_tmin = caustics::scene_ray_offset(frame);
+    c.scale.assign(gbuffer.covered.size(), 0.0);
+    for (std::size_t i = 0; i < gbuffer.covered.size(); ++i) {
+        if (!gbuffer.covered[i]) continue;
+        const glm::dvec3 to_cam = model.position - glm::dvec3(gbuffer.position[i]);
+        const double d2 = glm::dot(to_cam, to_cam);
+        const double cos_c = d2 > 0.0 ? glm::dot(glm::dvec3(gbuffer.normal[i]), to_cam) / std::sqrt(d2) : 1.0;
+        c.scale[i] = std::max(d2, 1e-12) / std::clamp(cos_c, 0.05, 1.0);
+    }
+}
+
 struct Result {
     double seconds = 0.0;
     std::uint64_t rays = 0;
     std::uint64_t deposited = 0;
+    std::uint64_t shadow_rays = 0;
 };
 
 // A wave's photons, one array per coordinate.
@@ -127,9 +163,10 @@ struct Wave {
     std::vector<double> ox, oy, oz, dx, dy, dz, nx, ny, nz;   // n: a height-field hit's normal
     std::vector<double> hx, hy, px, py, pz;                  // the height field's hits packed: x, y, normal
     std::vector<std::uint32_t> rng, depth, lane;             // lane: a packed hit's lane
-    std::vector<float> tfar;
+    std::vector<float> tfar, ngx, ngy, ngz;   // ng: Embree's geometric normal (unnormalised)
     std::vector<unsigned> geom;
     void resize(std::size_t n) {
+        for (auto* v : {&ngx, &ngy, &ngz}) v->resize(n);
         for (auto* v : {&ox, &oy, &oz, &dx, &dy, &dz, &nx, &ny, &nz, &hx, &hy, &px, &py, &pz}) v->resize(n);
         rng.resize(n), depth.resize(n), lane.resize(n), tfar.resize(n), geom.resize(n);
     }
@@ -158,6 +195,7 @@ inline void trace(RTCScene scene, Wave& w, std::size_t n) {
         for (std::size_t k = 0; k < 16 && k0 + k < n; ++k) {
             w.tfar[k0 + k] = p.ray.tfar[k];
             w.geom[k0 + k] = p.hit.geomID[k];
+            w.ngx[k0 + k] = p.hit.Ng_x[k], w.ngy[k0 + k] = p.hit.Ng_y[k], w.ngz[k0 + k] = p.hit.Ng_z[k];
         }
     }
 }
@@ -279,6 +317,67 @@ inline void step_dielectric(const IdealScene& s, Wave& w, std::size_t n) {
 #endif
 }
 
+// A wave's camera deposits waiting for their visibility rays.
+struct Shadows {
+    std::vector<glm::dvec3> origin, dir;
+    std::vector<double> tmax;
+    std::vector<std::size_t> pixel;
+    std::vector<std::int64_t> increment;
+    void clear() {
+        origin.clear(), dir.clear(), tmax.clear(), pixel.clear(), increment.clear();
+    }
+};
+
+// The reference's deposit_camera for lane k, a diffuse hit after a specular event (weight 1: one light,
+// no absorption). The diffuse objects are planes: the shading normal is the geometric one.
+inline void camera_deposit(const IdealScene& s, const Wave& w, std::size_t k, Shadows& out) {
+    const IdealCamera& c = s.camera;
+    const double t = w.tfar[k];
+    const glm::dvec3 p(w.ox[k] + t * w.dx[k], w.oy[k] + t * w.dy[k], w.oz[k] + t * w.dz[k]);
+    double px, py;
+    if (!c.model->project(p, px, py)) return;
+    if (!(px >= 0.0 && py >= 0.0 && px < c.gbuffer->width && py < c.gbuffer->height)) return;
+    const std::size_t pixel = c.gbuffer->index(static_cast<int>(px), static_cast<int>(py));
+    if (c.gbuffer->object[pixel] != static_cast<int>(w.geom[k])) return;   // geometry ids are object indices
+    glm::dvec3 to_camera = c.model->position - p;
+    const double dist = glm::length(to_camera);
+    if (!(dist > 0.0)) return;
+    to_camera /= dist;
+    const glm::dvec3 n = glm::normalize(glm::dvec3(w.ngx[k], w.ngy[k], w.ngz[k]));
+    const double side = w.dx[k] * n.x + w.dy[k] * n.y + w.dz[k] * n.z < 0.0 ? 1.0 : -1.0;
+    const double cos_c = side * glm::dot(n, to_camera);
+    if (cos_c <= 0.0) return;
+    const double x = c.scale[pixel] * cos_c / (dist * dist);
+    out.origin.push_back(p), out.dir.push_back(to_camera), out.tmax.push_back(dist * (1.0 - 1e-6));
+    out.pixel.push_back(pixel), out.increment.push_back(static_cast<std::int64_t>(x * 1073741824.0 + 0.5));
+}
+
+// The visibility rays, 16 at a time; a visible deposit adds to the thread's pixel sums.
+inline void resolve_shadows(const IdealScene& s, const Shadows& q, std::vector<std::int64_t>& pixel_sums) {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    const std::size_t n = q.origin.size();
+    const float tmin = static_cast<float>(s.camera.shadow_tmin);
+    for (std::size_t k0 = 0; k0 < n; k0 += 16) {
+        alignas(64) RTCRay16 r;
+        alignas(64) int valid[16];
+        for (int k = 0; k < 16; ++k) {
+            const std::size_t i = k0 + k < n ? k0 + k : k0;
+            valid[k] = k0 + k < n ? -1 : 0;
+            r.org_x[k] = static_cast<float>(q.origin[i].x), r.org_y[k] = static_cast<float>(q.origin[i].y);
+            r.org_z[k] = static_cast<float>(q.origin[i].z);
+            r.dir_x[k] = static_cast<float>(q.dir[i].x), r.dir_y[k] = static_cast<float>(q.dir[i].y);
+            r.dir_z[k] = static_cast<float>(q.dir[i].z);
+            r.tnear[k] = tmin, r.tfar[k] = static_cast<float>(q.tmax[i]), r.time[k] = 0.0f;
+            r.mask[k] = 0xFFFFFFFFu, r.id[k] = 0u, r.flags[k] = 0u;
+        }
+        rtcOccluded16(valid, s.scene, &context, &r);
+        for (std::size_t k = 0; k < 16 && k0 + k < n; ++k)   // Embree sets tfar to -inf where occluded
+            if (!(r.tfar[k] < 0.0f)) pixel_sums[q.pixel[k0 + k]] += q.increment[k0 + k];
+    }
+}
+
 // Batch b of a reference's photons: batches of kPhotonBatch per replica, replica after replica, as
 // compute_reference makes them.
 constexpr std::uint64_t kPhotonBatch = 65536;
@@ -302,7 +401,8 @@ struct ThreadBuffers {
     std::vector<std::uint32_t> order;
     caustics::SortScratch scratch;
     std::vector<glm::dvec3> origins, dirs;
-    std::vector<std::int64_t> bin_sums;
+    std::vector<std::int64_t> bin_sums, pixel_sums;
+    Shadows shadows;
     Wave w;
 };
 using Buffers = tbb::enumerable_thread_specific<ThreadBuffers>;
@@ -318,15 +418,17 @@ inline Result run(const IdealScene& s, const caustics::Emitter& emitter, const c
     const std::uint64_t batches = (per_replica + kPhotonBatch - 1) / kPhotonBatch;
     const std::size_t bins = static_cast<std::size_t>(s.chart->width()) * s.chart->height();
     struct Counts {
-        std::uint64_t rays = 0, deposited = 0;
+        std::uint64_t rays = 0, deposited = 0, shadow_rays = 0;
     };
+    const bool camera = s.camera.model != nullptr;
+    const std::size_t pixels = camera ? s.camera.gbuffer->covered.size() : 0;
     const auto start = std::chrono::steady_clock::now();
     const Counts total = tbb::parallel_reduce(
         tbb::blocked_range<std::uint64_t>(0, batches * replicas, 1), Counts{},
         [&](const tbb::blocked_range<std::uint64_t>& range, Counts acc) {
             ThreadBuffers& t = buffers.local();
-            auto& [by_index, emission, order, scratch, origins, dirs, bin_sums, w] = t;
-            origins.resize(kWave), dirs.resize(kWave), bin_sums.resize(bins), w.resize(kWave);
+            auto& [by_index, emission, order, scratch, origins, dirs, bin_sums, pixel_sums, shadows, w] = t;
+            origins.resize(kWave), dirs.resize(kWave), bin_sums.resize(bins), pixel_sums.resize(pixels), w.resize(kWave);
             for (std::uint64_t b = range.begin(); b < range.end(); ++b) {
                 const PhotonBatch batch(b, batches, per_replica, settings);
                 const auto [replica, first, n, seeds] = batch;
@@ -348,11 +450,19 @@ inline Result run(const IdealScene& s, const caustics::Emitter& emitter, const c
                         trace(s.scene, w, live);
                         acc.rays += live;
                         // Receiver hits deposit (after a specular event) before the step moves origins.
+                        shadows.clear();
                         for (std::size_t k = 0; k < live; ++k) {
-                            if (w.geom[k] != s.receiver_geom || w.depth[k] == 0) continue;
+                            if (w.depth[k] == 0 || w.geom[k] == s.dielectric_geom || w.geom[k] == RTC_INVALID_GEOMETRY_ID)
+                                continue;
+                            if (camera) camera_deposit(s, w, k, shadows);
+                            if (w.geom[k] != s.receiver_geom) continue;
                             const double tf = w.tfar[k];
                             const int bin = s.chart->bin_of({w.ox[k] + tf * w.dx[k], w.oy[k] + tf * w.dy[k], w.oz[k] + tf * w.dz[k]});
                             if (bin >= 0) ++bin_sums[static_cast<std::size_t>(bin)], ++acc.deposited;
+                        }
+                        if (!shadows.origin.empty()) {
+                            resolve_shadows(s, shadows, pixel_sums);
+                            acc.shadow_rays += shadows.origin.size();
                         }
                         step_dielectric(s, w, live);
                         // The dielectric's hits go on; the rest end.
@@ -371,11 +481,11 @@ inline Result run(const IdealScene& s, const caustics::Emitter& emitter, const c
             return acc;
         },
         [](Counts a, const Counts& b) {
-            a.rays += b.rays, a.deposited += b.deposited;
+            a.rays += b.rays, a.deposited += b.deposited, a.shadow_rays += b.shadow_rays;
             return a;
         });
     return {std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), total.rays,
-            total.deposited};
+            total.deposited, total.shadow_rays};
 }
 
 }  // namespace ideal
