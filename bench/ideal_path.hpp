@@ -172,6 +172,14 @@ struct Wave {
     }
 };
 
+// Lane k of a 16-ray packet: the ray origin + t dir, t in [tnear, tfar].
+inline void put_lane(RTCRay16& r, int k, const glm::dvec3& o, const glm::dvec3& d, float tnear, float tfar) {
+    r.org_x[k] = static_cast<float>(o.x), r.org_y[k] = static_cast<float>(o.y), r.org_z[k] = static_cast<float>(o.z);
+    r.dir_x[k] = static_cast<float>(d.x), r.dir_y[k] = static_cast<float>(d.y), r.dir_z[k] = static_cast<float>(d.z);
+    r.tnear[k] = tnear, r.tfar[k] = tfar, r.time[k] = 0.0f;
+    r.mask[k] = 0xFFFFFFFFu, r.id[k] = 0u, r.flags[k] = 0u;
+}
+
 // Embree's closest hits for the wave's first n rays, 16 at a time.
 inline void trace(RTCScene scene, Wave& w, std::size_t n) {
     RTCIntersectContext context;
@@ -183,12 +191,7 @@ inline void trace(RTCScene scene, Wave& w, std::size_t n) {
         for (int k = 0; k < 16; ++k) {
             const std::size_t i = k0 + k < n ? k0 + k : k0;
             valid[k] = k0 + k < n ? -1 : 0;
-            p.ray.org_x[k] = static_cast<float>(w.ox[i]), p.ray.org_y[k] = static_cast<float>(w.oy[i]);
-            p.ray.org_z[k] = static_cast<float>(w.oz[i]);
-            p.ray.dir_x[k] = static_cast<float>(w.dx[i]), p.ray.dir_y[k] = static_cast<float>(w.dy[i]);
-            p.ray.dir_z[k] = static_cast<float>(w.dz[i]);
-            p.ray.tnear[k] = 1e-4f, p.ray.tfar[k] = 1e30f, p.ray.time[k] = 0.0f;
-            p.ray.mask[k] = 0xFFFFFFFFu, p.ray.id[k] = 0u, p.ray.flags[k] = 0u;
+            put_lane(p.ray, k, {w.ox[i], w.oy[i], w.oz[i]}, {w.dx[i], w.dy[i], w.dz[i]}, 1e-4f, 1e30f);
             p.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID, p.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
         }
         rtcIntersect16(valid, scene, &context, &p);
@@ -365,12 +368,7 @@ inline void resolve_shadows(const IdealScene& s, const Shadows& q, std::vector<s
         for (int k = 0; k < 16; ++k) {
             const std::size_t i = k0 + k < n ? k0 + k : k0;
             valid[k] = k0 + k < n ? -1 : 0;
-            r.org_x[k] = static_cast<float>(q.origin[i].x), r.org_y[k] = static_cast<float>(q.origin[i].y);
-            r.org_z[k] = static_cast<float>(q.origin[i].z);
-            r.dir_x[k] = static_cast<float>(q.dir[i].x), r.dir_y[k] = static_cast<float>(q.dir[i].y);
-            r.dir_z[k] = static_cast<float>(q.dir[i].z);
-            r.tnear[k] = tmin, r.tfar[k] = static_cast<float>(q.tmax[i]), r.time[k] = 0.0f;
-            r.mask[k] = 0xFFFFFFFFu, r.id[k] = 0u, r.flags[k] = 0u;
+            put_lane(r, k, q.origin[i], q.dir[i], tmin, static_cast<float>(q.tmax[i]));
         }
         rtcOccluded16(valid, s.scene, &context, &r);
         for (std::size_t k = 0; k < 16 && k0 + k < n; ++k)   // Embree sets tfar to -inf where occluded

@@ -102,18 +102,17 @@ TEST(HeightFieldNormals, ArbitraryGradientsSameBitsAsSampleNormal) {
 
 TEST(HeightFieldNormals, FieldsOutsideTheVectorPathSameBits) {
     // Periodic (noise), exact gradient (sine) and a single vertex along an axis go point by point.
-    HeightFieldDesc noise;
-    noise.resolution = {32, 32};
-    noise.generator = HeightGenerator::Noise;
-    noise.amplitude = 0.02;
-    const HeightField periodic = generate_heightfield(noise, 0.0, 0, 30.0);
+    auto generated = [](HeightGenerator generator, glm::ivec2 resolution) {
+        HeightFieldDesc d;
+        d.resolution = resolution;
+        d.generator = generator;
+        d.amplitude = 0.02;
+        return generate_heightfield(d, 0.0, 0, 30.0);
+    };
+    const HeightField periodic = generated(HeightGenerator::Noise, {32, 32});
     ASSERT_TRUE(periodic.periodic);
     expect_same_bits(periodic, probe_points(periodic, 3));
-    HeightFieldDesc sine;
-    sine.resolution = {32, 16};
-    sine.generator = HeightGenerator::Sine;
-    sine.amplitude = 0.02;
-    const HeightField exact = generate_heightfield(sine, 0.0, 0, 30.0);
+    const HeightField exact = generated(HeightGenerator::Sine, {32, 16});
     ASSERT_TRUE(exact.exact_gradient);
     expect_same_bits(exact, probe_points(exact, 4));
     HeightField line = field_with_gradient([](double x, double) { return glm::vec2(float(x), 0.5f); });
