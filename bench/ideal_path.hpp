@@ -10,8 +10,7 @@
 //   (HeightField::sample_normals, four lanes at a time, as the reference's);
 // - Snell's law and total internal reflection;
 // - Fresnel by Russian roulette where the scene asks (Scene::fresnel; neither scene does);
-// - the deposit on the receiver's bins after a specular event; any other diffuse hit ends the photon.
-//
+// - the deposit on the receiver's bins after a specular event; any other diffuse hit ends the photon;
 // - with the camera view (with_camera), the reference's camera deposit of every diffuse hit after a
 //   specular event: the pixel, the G-buffer's object, the sides and the cosine, then a visibility ray
 //   towards the pinhole (16-ray packets), into pixel sums private to each thread.
@@ -51,8 +50,6 @@
 
 namespace ideal {
 
-// One dielectric (an exact sphere or a height field's triangles) and diffuse objects, one of them the
-// receiver: what `sphere` and `pool` are.
 // The camera view: the pinhole, the G-buffer and each pixel's footprint (reference.cpp's pixel table).
 struct IdealCamera {
     const caustics::CameraModel* model = nullptr;
@@ -61,6 +58,8 @@ struct IdealCamera {
     double shadow_tmin = 0.0;    // the tracer's minimum tnear (scene_ray_offset)
 };
 
+// One dielectric (an exact sphere or a height field's triangles) and diffuse objects, one of them the
+// receiver: what `sphere` and `pool` are.
 struct IdealScene {
     RTCScene scene = nullptr;
     unsigned dielectric_geom = RTC_INVALID_GEOMETRY_ID;     // the dielectric's geometry id

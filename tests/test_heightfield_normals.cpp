@@ -1,6 +1,7 @@
 // HeightField::sample_normals (heightfield_normals.cpp) against sample_normal, bit for bit, on the fields
 // and points the reference meets and the edges of the grid; and against an exact closed form on a field
 // whose bilinear gradient is exact.
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -12,6 +13,7 @@
 #include <glm/glm.hpp>
 
 #include <caustics/scene/heightfield/heightfield.hpp>
+#include <caustics/util/target_clones.hpp>
 
 using namespace caustics;
 
@@ -77,6 +79,7 @@ HeightField field_with_gradient(Gradient gradient) {
 }  // namespace
 
 TEST(HeightFieldNormals, WavesFieldSameBitsAsSampleNormal) {
+    if (!cpu_has_avx2()) GTEST_SKIP() << "no AVX2: sample_normals is sample_normal point by point";
     // The pool's surface: the waves simulation, neither periodic nor with an exact gradient.
     HeightFieldDesc d;
     d.size = {2.0, 2.0};
@@ -86,18 +89,43 @@ TEST(HeightFieldNormals, WavesFieldSameBitsAsSampleNormal) {
     const HeightField hf = generate_heightfield(d, 0.5, 15, 30.0);
     ASSERT_FALSE(hf.periodic);
     ASSERT_FALSE(hf.exact_gradient);
-    RecordProperty("avx2", __builtin_cpu_supports("avx2") ? "yes" : "no");
     expect_same_bits(hf, probe_points(hf, 1));
 }
 
 TEST(HeightFieldNormals, ArbitraryGradientsSameBitsAsSampleNormal) {
+    if (!cpu_has_avx2()) GTEST_SKIP() << "no AVX2: sample_normals is sample_normal point by point";
     // Gradients of every sign and a wide range of magnitudes, steep ones included.
     std::mt19937_64 rng(7);
     std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    auto component = [&] {
+        const float mantissa = u(rng);
+        return std::ldexp(mantissa, static_cast<int>(rng() % 24) - 12);
+    };
     const HeightField hf = field_with_gradient([&](double, double) {
-        return glm::vec2(std::ldexp(u(rng), static_cast<int>(rng() % 24) - 12), std::ldexp(u(rng), static_cast<int>(rng() % 24) - 12));
+        const float gx = component();
+        return glm::vec2(gx, component());
     });
     expect_same_bits(hf, probe_points(hf, 2));
+}
+
+TEST(HeightFieldNormals, GridEdgesAndSignedZerosSameBits) {
+    if (!cpu_has_avx2()) GTEST_SKIP() << "no AVX2: sample_normals is sample_normal point by point";
+    // A grid whose origin is (0, 0): x = -0 gives the grid coordinate -0 (kept by std::clamp, then
+    // truncated to cell 0 with f = -0), tiny negatives clamp to +0, and the far edges land in the last
+    // cell with f = 1.
+    // The second field's gradients are all -0, so a cell position of -0 against +0 shows in the normal's
+    // sign bits.
+    for (const float zero_sign : {1.0f, -1.0f}) {
+        HeightField hf = field_with_gradient([&](double x, double y) {
+            return zero_sign > 0.0f ? glm::vec2(float(0.3 - x), float(y * y)) : glm::vec2(-0.0f, -0.0f);
+        });
+        hf.origin = {0.0, 0.0};
+        const glm::dvec2 hi = hf.extent();
+        std::vector<glm::dvec2> points;
+        for (const double x : {-0.0, 0.0, -1e-300, 1e-300, -5e-324, hi.x, std::nextafter(hi.x, 0.0), 2.0 * hi.x})
+            for (const double y : {-0.0, 0.0, -1e-300, 0.5 * hi.y, hi.y, std::nextafter(hi.y, 0.0)}) points.emplace_back(x, y);
+        expect_same_bits(hf, points);
+    }
 }
 
 TEST(HeightFieldNormals, FieldsOutsideTheVectorPathSameBits) {

@@ -1,5 +1,6 @@
 // exact_sphere_hits (harness/frame/sphere_hits.cpp) against exact_sphere_hit, bit for bit, on rays from
 // outside and inside, grazing, missing and behind; and exact_sphere_hit against the sphere's equation.
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -10,6 +11,7 @@
 #include <glm/glm.hpp>
 
 #include <caustics/frame/sphere_hits.hpp>
+#include <caustics/util/target_clones.hpp>
 
 using namespace caustics;
 
@@ -71,8 +73,20 @@ std::vector<Ray> probe_rays() {
 }  // namespace
 
 TEST(SphereHits, GroupsSameBitsAsOneAtATime) {
-    RecordProperty("avx2", __builtin_cpu_supports("avx2") ? "yes" : "no");
-    const std::vector<Ray> rays = probe_rays();
+    if (!cpu_has_avx2()) GTEST_SKIP() << "no AVX2: exact_sphere_hits is exact_sphere_hit ray by ray";
+    std::vector<Ray> rays = probe_rays();
+    // The branches' edges: a tangent ray from the surface (b = 0 and disc = 0, so q = 0 and t1 = t0),
+    // Embree's distance exactly between the two roots (a tie the far root wins), at a root, NaN, and a
+    // ray whose roots are both behind it.
+    const glm::dvec3 side = kCenter + glm::dvec3(kRadius, 0.0, 0.0);
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    rays.push_back({side, {0.0, 1.0, 0.0}, 0.5});
+    rays.push_back({side, {0.0, 0.0, -1.0}, 0.0});
+    rays.push_back({kCenter + glm::dvec3(0.0, 0.0, 2.0), {0.0, 0.0, -1.0}, 2.0});   // roots 1.25, 2.75
+    rays.push_back({kCenter + glm::dvec3(0.0, 0.0, 2.0), {0.0, 0.0, -1.0}, 1.25});
+    rays.push_back({kCenter + glm::dvec3(0.0, 0.0, 2.0), {0.0, 0.0, -1.0}, nan});
+    rays.push_back({kCenter + glm::dvec3(0.0, 0.0, 2.0), {0.0, 0.0, 1.0}, 1.0});
+    rays.push_back({kCenter, {0.0, 0.0, 1.0}, 0.75});
     const std::size_t n = rays.size();
     std::vector<double> ox(n), oy(n), oz(n), dx(n), dy(n), dz(n), t(n), px(n), py(n), pz(n), nx(n), ny(n), nz(n);
     for (std::size_t k = 0; k < n; ++k) {

@@ -240,15 +240,16 @@ struct RayTracer::Impl {
     double min_tmin = 0.0;                  // self-intersection guard scaled to the scene size
     double ng_sign = 1.0;                   // embree_ng_sign(), cached
 
-    // The Hit of one ray from Embree's raw answer: one code path for single and packet queries, so
-    // that both give the same bits. Written into `out` field by field: a returned Hit was copied in
-    // 16-byte pieces from a temporary just written in 8-byte ones, a store-forwarding stall per hit.
-    // With `later` set, a sphere's exact hit and a height field's shading normal are left to
-    // later.finish(), which computes a group's together (exact_sphere_hits and
-    // HeightField::sample_normals: the same bits as one at a time).
-    struct Later;
+    // The Hit of one ray from Embree's raw answer, for single and packet queries. Written into `out`
+    // field by field: a returned Hit was copied in 16-byte pieces from a temporary just written in
+    // 8-byte ones, a store-forwarding stall per hit. With `deferred` set (batches), a sphere's exact hit
+    // and a height field's shading normal are left to deferred->finish(), which computes a group's
+    // together with exact_sphere_hits and HeightField::sample_normals; single rays call
+    // exact_sphere_hit and sample_normal. The two forms give the same bits (tests/test_sphere_hits.cpp,
+    // tests/test_heightfield_normals.cpp, and RayTracerBatches in tests/test_reference_bits.cpp).
+    struct DeferredHits;
     void complete(const glm::dvec3& origin, const glm::dvec3& dir, const RawHit& raw, Hit& out,
-                  Later* later = nullptr) const;
+                  DeferredHits* deferred = nullptr) const;
     // Throws on a ray Embree would abort on; tmin is the query's as Embree gets it (at least min_tmin).
     void check(const RayQuery& q, double tmin, const char* what) const {
         if (!valid_ray(q.origin, q.dir, tmin, q.tmax)) [[unlikely]]
@@ -357,8 +358,9 @@ Hit RayTracer::intersect(const glm::dvec3& origin, const glm::dvec3& dir, double
     return hit;
 }
 
-// A group's sphere and height-field hits, waiting for the rest of their completion.
-struct RayTracer::Impl::Later {
+// A group's sphere and height-field hits, waiting for the rest of their completion. An entry whose
+// object is null is done (finish groups the entries by object).
+struct RayTracer::Impl::DeferredHits {
     int spheres = 0, fields = 0;
     const Object* sphere[kGroup];
     const HeightField* field[kGroup];
@@ -385,11 +387,11 @@ struct RayTracer::Impl::Later {
             if (!o) continue;
             double ox[kGroup], oy[kGroup], oz[kGroup], dx[kGroup], dy[kGroup], dz[kGroup], t[kGroup];
             double px[kGroup], py[kGroup], pz[kGroup], nx[kGroup], ny[kGroup], nz[kGroup];
-            Hit* of[kGroup];
+            Hit* waiting[kGroup];
             int n = 0;
             for (int j = i; j < spheres; ++j) {
                 if (sphere[j] != o) continue;
-                of[n] = sphere_hit[j];
+                waiting[n] = sphere_hit[j];
                 ox[n] = origin[j]->x, oy[n] = origin[j]->y, oz[n] = origin[j]->z;
                 dx[n] = dir[j]->x, dy[n] = dir[j]->y, dz[n] = dir[j]->z;
                 t[n] = sphere_hit[j]->t;
@@ -399,7 +401,7 @@ struct RayTracer::Impl::Later {
             exact_sphere_hits(o->center, o->radius, static_cast<std::size_t>(n),
                               {ox, oy, oz, dx, dy, dz, t, px, py, pz, nx, ny, nz});
             for (int k = 0; k < n; ++k) {
-                Hit& h = *of[k];
+                Hit& h = *waiting[k];
                 h.t = t[k];
                 h.position = {px[k], py[k], pz[k]};
                 h.geometric_normal = h.shading_normal = {nx[k], ny[k], nz[k]};
@@ -414,11 +416,11 @@ struct RayTracer::Impl::Later {
             const HeightField* f = field[i];
             if (!f) continue;
             double x[kGroup], y[kGroup], nx[kGroup], ny[kGroup], nz[kGroup];
-            Hit* of[kGroup];
+            Hit* waiting[kGroup];
             int n = 0;
             for (int j = i; j < fields; ++j) {
                 if (field[j] != f) continue;
-                of[n] = field_hit[j];
+                waiting[n] = field_hit[j];
                 x[n] = field_hit[j]->position.x, y[n] = field_hit[j]->position.y;
                 ++n;
                 field[j] = nullptr;
@@ -426,8 +428,8 @@ struct RayTracer::Impl::Later {
             f->sample_normals(x, y, static_cast<std::size_t>(n), nx, ny, nz);
             for (int k = 0; k < n; ++k) {
                 glm::dvec3 shading(nx[k], ny[k], nz[k]);
-                if (glm::dot(shading, of[k]->geometric_normal) < 0.0) shading = -shading;
-                of[k]->shading_normal = shading;
+                if (glm::dot(shading, waiting[k]->geometric_normal) < 0.0) shading = -shading;
+                waiting[k]->shading_normal = shading;
             }
         }
         fields = 0;
@@ -435,7 +437,7 @@ struct RayTracer::Impl::Later {
 };
 
 void RayTracer::Impl::complete(const glm::dvec3& origin, const glm::dvec3& dir, const RawHit& raw, Hit& out,
-                               Later* later) const {
+                               DeferredHits* deferred) const {
     const GeometryInfo& info = geometries[raw.geom_id];
     const ObjectInstance& inst = *info.instance;
     double t = raw.tfar;
@@ -443,11 +445,11 @@ void RayTracer::Impl::complete(const glm::dvec3& origin, const glm::dvec3& dir, 
 
     if (inst.analytic_sphere) {
         // Exact ray-sphere distance in double, the root nearest Embree's float answer.
-        if (later) {
+        if (deferred) {
             out.valid = true;
             out.object = info.object;
             out.t = t;
-            later->add_sphere(inst.object, origin, dir, out);
+            deferred->add_sphere(inst.object, origin, dir, out);
             return;
         }
         const SphereHit h = exact_sphere_hit(inst.object->center, inst.object->radius, origin, dir, t);
@@ -463,13 +465,13 @@ void RayTracer::Impl::complete(const glm::dvec3& origin, const glm::dvec3& dir, 
         geometric_normal = len > 0.0 ? (ng_sign / len) * ng : glm::dvec3(0.0, 0.0, 1.0);
         position = origin + t * dir;
 
-        if (inst.heightfield && later) {
+        if (inst.heightfield && deferred) {
             out.valid = true;
             out.object = info.object;
             out.t = t;
             out.position = position;
             out.geometric_normal = geometric_normal;
-            later->add_field(inst.heightfield.get(), out);
+            deferred->add_field(inst.heightfield.get(), out);
             return;
         }
         if (inst.heightfield) {
@@ -608,16 +610,16 @@ void RayTracer::Impl::visibility_packet(const RayQuery* queries, int count, std:
 
 void RayTracer::intersect(const RayQuery* queries, std::size_t n, Hit* hits, QueryMode mode) const {
     RawHit raw[kGroup];
-    Impl::Later later;
+    Impl::DeferredHits deferred;
     for (std::size_t first = 0; first < n; first += kGroup) {
         const int count = static_cast<int>(std::min<std::size_t>(kGroup, n - first));
         impl_->raw_hits(queries + first, count, mode, raw);   // prefetches the shading-normal records
         for (int k = 0; k < count; ++k) {
             const RayQuery& q = queries[first + k];
             if (raw[k].geom_id == RTC_INVALID_GEOMETRY_ID) hits[first + k] = Hit{};
-            else impl_->complete(q.origin, q.dir, raw[k], hits[first + k], &later);
+            else impl_->complete(q.origin, q.dir, raw[k], hits[first + k], &deferred);
         }
-        later.finish();
+        deferred.finish();
     }
 }
 

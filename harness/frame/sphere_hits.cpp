@@ -1,9 +1,13 @@
-// exact_sphere_hit and its four-lane form. The AVX2 version does exact_sphere_hit's operations in the same
-// order, each correctly rounded by IEEE 754, with its branches as per-lane selections; it uses no FMA, as
-// the scalar code (built for x86-64's baseline) contracts nothing. So each lane's bits equal
-// exact_sphere_hit's (tests/test_sphere_hits.cpp). A group's hits are completed together because one at a
-// time the square roots and divisions of a hit waited on each other (issue 18's profile).
+// exact_sphere_hit and its four-lane form. The AVX2 version does exact_sphere_hit's operations in the
+// same order, each correctly rounded by IEEE 754, with its branches as per-lane selections. It uses no
+// FMA, and the scalar code contracts none (x86-64's baseline has no FMA, and harness/CMakeLists.txt
+// builds this file with -ffp-contract=off should a build enable it), so each lane's bits equal
+// exact_sphere_hit's (tests/test_sphere_hits.cpp). The tracer completes a group's sphere hits together:
+// one at a time, each hit's square roots and divisions waited on one another
+// (docs/reference_throughput.md).
 #include <caustics/frame/sphere_hits.hpp>
+
+#include <caustics/util/target_clones.hpp>
 
 #include <cmath>
 #include <utility>
@@ -16,7 +20,8 @@
 namespace caustics {
 
 SphereHit exact_sphere_hit(const glm::dvec3& center, double radius, const glm::dvec3& origin, const glm::dvec3& dir,
-                           double t) {
+                           double t_embree) {
+    double t = t_embree;
     const glm::dvec3 oc = origin - center;
     const double a = glm::dot(dir, dir);
     const double b = glm::dot(oc, dir);
@@ -37,7 +42,8 @@ SphereHit exact_sphere_hit(const glm::dvec3& center, double radius, const glm::d
 
 namespace {
 
-void scalar_hits(const glm::dvec3& center, double radius, std::size_t first, std::size_t n, const SphereHitLanes& l) {
+void scalar_hits(const glm::dvec3& center, double radius, std::size_t first, std::size_t n, const SphereHitLanes& lanes) {
+    const SphereHitLanes& l = lanes;
     for (std::size_t k = first; k < n; ++k) {
         const SphereHit h = exact_sphere_hit(center, radius, {l.ox[k], l.oy[k], l.oz[k]}, {l.dx[k], l.dy[k], l.dz[k]}, l.t[k]);
         l.t[k] = h.t;
@@ -93,11 +99,6 @@ __attribute__((target("avx2"))) std::size_t avx2_hits(const glm::dvec3& center, 
         _mm256_storeu_pd(l.nz + k, _mm256_mul_pd(vz, inverse));
     }
     return k;
-}
-
-bool cpu_has_avx2() {
-    static const bool yes = __builtin_cpu_supports("avx2");
-    return yes;
 }
 
 #endif

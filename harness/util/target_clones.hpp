@@ -9,3 +9,18 @@
 #else
 #define CAUSTICS_AVX2_CLONES
 #endif
+
+namespace caustics {
+
+// Whether this CPU runs AVX2 code: the test before a function written with AVX2 intrinsics (under
+// __attribute__((target("avx2")))) is called. False off x86-64.
+inline bool cpu_has_avx2() {
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+    static const bool yes = __builtin_cpu_supports("avx2");
+    return yes;
+#else
+    return false;
+#endif
+}
+
+}  // namespace caustics

@@ -1,14 +1,17 @@
-// HeightField::sample_normals: sample_normal for a batch of points. The reference completes a wave's
-// height-field hits together (harness/frame/ray_tracer.cpp), where one point at a time spent most of its
-// time waiting on two divisions, a square root and a third division in a chain (issue 18's profile).
+// HeightField::sample_normals: sample_normal for a batch of points. The reference's tracer completes a
+// group's height-field hits together (harness/frame/ray_tracer.cpp): one point at a time, each waited on
+// its chain of two divisions, a square root and a third division (docs/reference_throughput.md).
 //
 // The AVX2 version does the operations of sample_normal (heightfield.cpp: grid_coord, the bilinear
 // gradient, glm::normalize) in the same order, each correctly rounded by IEEE 754, four points per
-// vector. It uses no FMA, as the scalar code (built for x86-64's baseline, which has none) contracts
-// nothing, so each lane's bits equal sample_normal's (tests/test_heightfield_normals.cpp). Fields that
-// wrap (fmod), have an exact gradient (a std::function), a single vertex along an axis, or more vertices
-// than 32-bit gather indices reach, and CPUs without AVX2, take sample_normal point by point.
+// vector. It uses no FMA, and the scalar code contracts none (x86-64's baseline has no FMA, and
+// harness/CMakeLists.txt builds both files with -ffp-contract=off should a build enable it), so each
+// lane's bits equal sample_normal's (tests/test_heightfield_normals.cpp). Fields that wrap (fmod), have an
+// exact gradient (a std::function), a single vertex along an axis, or more vertices than 32-bit gather
+// indices reach, and CPUs without AVX2, take sample_normal point by point.
 #include <caustics/scene/heightfield/heightfield.hpp>
+
+#include <caustics/util/target_clones.hpp>
 
 #include <cstdint>
 #include <limits>
@@ -98,11 +101,6 @@ __attribute__((target("avx2"))) void avx2_normals(const HeightField& hf, const d
         _mm256_storeu_pd(nz + k, inverse);
     }
     scalar_normals(hf, x + k, y + k, n - k, nx + k, ny + k, nz + k);
-}
-
-bool cpu_has_avx2() {
-    static const bool yes = __builtin_cpu_supports("avx2");
-    return yes;
 }
 
 #endif
