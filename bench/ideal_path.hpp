@@ -179,27 +179,45 @@ inline void put_lane(RTCRay16& r, int k, const glm::dvec3& o, const glm::dvec3& 
     r.mask[k] = 0xFFFFFFFFu, r.id[k] = 0u, r.flags[k] = 0u;
 }
 
-// Embree's closest hits for the wave's first n rays, 16 at a time.
-inline void trace(RTCScene scene, Wave& w, std::size_t n) {
+// n queries in 16-ray packets: lane(k, i) fills lane k from query i (lanes past n repeat the packet's
+// first query, inactive), then query(k0, valid) sends the packet of queries k0 .. k0 + 15.
+template <class Lane, class Query>
+inline void in_packets16(std::size_t n, Lane lane, Query query) {
+    for (std::size_t k0 = 0; k0 < n; k0 += 16) {
+        alignas(64) int valid[16];
+        for (int k = 0; k < 16; ++k) {
+            valid[k] = k0 + k < n ? -1 : 0;
+            lane(k, k0 + k < n ? k0 + k : k0);
+        }
+        query(k0, valid);
+    }
+}
+
+inline RTCIntersectContext coherent_context() {
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-    for (std::size_t k0 = 0; k0 < n; k0 += 16) {
-        alignas(64) RTCRayHit16 p;
-        alignas(64) int valid[16];
-        for (int k = 0; k < 16; ++k) {
-            const std::size_t i = k0 + k < n ? k0 + k : k0;
-            valid[k] = k0 + k < n ? -1 : 0;
+    return context;
+}
+
+// Embree's closest hits for the wave's first n rays, 16 at a time.
+inline void trace(RTCScene scene, Wave& w, std::size_t n) {
+    RTCIntersectContext context = coherent_context();
+    alignas(64) RTCRayHit16 p;
+    in_packets16(
+        n,
+        [&](int k, std::size_t i) {
             put_lane(p.ray, k, {w.ox[i], w.oy[i], w.oz[i]}, {w.dx[i], w.dy[i], w.dz[i]}, 1e-4f, 1e30f);
             p.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID, p.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
-        }
-        rtcIntersect16(valid, scene, &context, &p);
-        for (std::size_t k = 0; k < 16 && k0 + k < n; ++k) {
-            w.tfar[k0 + k] = p.ray.tfar[k];
-            w.geom[k0 + k] = p.hit.geomID[k];
-            w.ngx[k0 + k] = p.hit.Ng_x[k], w.ngy[k0 + k] = p.hit.Ng_y[k], w.ngz[k0 + k] = p.hit.Ng_z[k];
-        }
-    }
+        },
+        [&](std::size_t k0, int* valid) {
+            rtcIntersect16(valid, scene, &context, &p);
+            for (std::size_t k = 0; k < 16 && k0 + k < n; ++k) {
+                w.tfar[k0 + k] = p.ray.tfar[k];
+                w.geom[k0 + k] = p.hit.geomID[k];
+                w.ngx[k0 + k] = p.hit.Ng_x[k], w.ngy[k0 + k] = p.hit.Ng_y[k], w.ngz[k0 + k] = p.hit.Ng_z[k];
+            }
+        });
 }
 
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
@@ -356,23 +374,17 @@ inline void camera_deposit(const IdealScene& s, const Wave& w, std::size_t k, Sh
 
 // The visibility rays, 16 at a time; a visible deposit adds to the thread's pixel sums.
 inline void resolve_shadows(const IdealScene& s, const Shadows& q, std::vector<std::int64_t>& pixel_sums) {
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    RTCIntersectContext context = coherent_context();
     const std::size_t n = q.origin.size();
     const float tmin = static_cast<float>(s.camera.shadow_tmin);
-    for (std::size_t k0 = 0; k0 < n; k0 += 16) {
-        alignas(64) RTCRay16 r;
-        alignas(64) int valid[16];
-        for (int k = 0; k < 16; ++k) {
-            const std::size_t i = k0 + k < n ? k0 + k : k0;
-            valid[k] = k0 + k < n ? -1 : 0;
-            put_lane(r, k, q.origin[i], q.dir[i], tmin, static_cast<float>(q.tmax[i]));
-        }
-        rtcOccluded16(valid, s.scene, &context, &r);
-        for (std::size_t k = 0; k < 16 && k0 + k < n; ++k)   // Embree sets tfar to -inf where occluded
-            if (!(r.tfar[k] < 0.0f)) pixel_sums[q.pixel[k0 + k]] += q.increment[k0 + k];
-    }
+    alignas(64) RTCRay16 r;
+    in_packets16(
+        n, [&](int k, std::size_t i) { put_lane(r, k, q.origin[i], q.dir[i], tmin, static_cast<float>(q.tmax[i])); },
+        [&](std::size_t k0, int* valid) {
+            rtcOccluded16(valid, s.scene, &context, &r);
+            for (std::size_t k = 0; k < 16 && k0 + k < n; ++k)   // Embree sets tfar to -inf where occluded
+                if (!(r.tfar[k] < 0.0f)) pixel_sums[q.pixel[k0 + k]] += q.increment[k0 + k];
+        });
 }
 
 // Batch b of a reference's photons: batches of kPhotonBatch per replica, replica after replica, as

@@ -33,6 +33,8 @@
 #include <caustics/frame/sphere_hits.hpp>
 #include <caustics/util/huge_pages.hpp>
 
+#include "detail/deferred_hits.hpp"
+
 namespace caustics {
 namespace {
 
@@ -247,9 +249,8 @@ struct RayTracer::Impl {
     // together with exact_sphere_hits and HeightField::sample_normals; single rays call
     // exact_sphere_hit and sample_normal. The two forms give the same bits (tests/test_sphere_hits.cpp,
     // tests/test_heightfield_normals.cpp, and RayTracerBatches in tests/test_reference_bits.cpp).
-    struct DeferredHits;
     void complete(const glm::dvec3& origin, const glm::dvec3& dir, const RawHit& raw, Hit& out,
-                  DeferredHits* deferred = nullptr) const;
+                  DeferredHits<kGroup>* deferred = nullptr) const;
     // Throws on a ray Embree would abort on; tmin is the query's as Embree gets it (at least min_tmin).
     void check(const RayQuery& q, double tmin, const char* what) const {
         if (!valid_ray(q.origin, q.dir, tmin, q.tmax)) [[unlikely]]
@@ -358,86 +359,8 @@ Hit RayTracer::intersect(const glm::dvec3& origin, const glm::dvec3& dir, double
     return hit;
 }
 
-// A group's sphere and height-field hits, waiting for the rest of their completion. An entry whose
-// object is null is done (finish groups the entries by object).
-struct RayTracer::Impl::DeferredHits {
-    int spheres = 0, fields = 0;
-    const Object* sphere[kGroup];
-    const HeightField* field[kGroup];
-    const glm::dvec3 *origin[kGroup], *dir[kGroup];
-    Hit* sphere_hit[kGroup];
-    Hit* field_hit[kGroup];
-    void add_sphere(const Object* o, const glm::dvec3& org, const glm::dvec3& d, Hit& h) {
-        sphere[spheres] = o;
-        origin[spheres] = &org, dir[spheres] = &d;
-        sphere_hit[spheres++] = &h;
-    }
-    void add_field(const HeightField* f, Hit& h) {
-        field[fields] = f;
-        field_hit[fields++] = &h;
-    }
-    void finish() {
-        finish_spheres();
-        finish_fields();
-    }
-    // Each sphere's hits in one call (hit.t holds Embree's distance until then).
-    void finish_spheres() {
-        for (int i = 0; i < spheres; ++i) {
-            const Object* o = sphere[i];
-            if (!o) continue;
-            double ox[kGroup], oy[kGroup], oz[kGroup], dx[kGroup], dy[kGroup], dz[kGroup], t[kGroup];
-            double px[kGroup], py[kGroup], pz[kGroup], nx[kGroup], ny[kGroup], nz[kGroup];
-            Hit* waiting[kGroup];
-            int n = 0;
-            for (int j = i; j < spheres; ++j) {
-                if (sphere[j] != o) continue;
-                waiting[n] = sphere_hit[j];
-                ox[n] = origin[j]->x, oy[n] = origin[j]->y, oz[n] = origin[j]->z;
-                dx[n] = dir[j]->x, dy[n] = dir[j]->y, dz[n] = dir[j]->z;
-                t[n] = sphere_hit[j]->t;
-                ++n;
-                sphere[j] = nullptr;
-            }
-            exact_sphere_hits(o->center, o->radius, static_cast<std::size_t>(n),
-                              {ox, oy, oz, dx, dy, dz, t, px, py, pz, nx, ny, nz});
-            for (int k = 0; k < n; ++k) {
-                Hit& h = *waiting[k];
-                h.t = t[k];
-                h.position = {px[k], py[k], pz[k]};
-                h.geometric_normal = h.shading_normal = {nx[k], ny[k], nz[k]};
-            }
-        }
-        spheres = 0;
-    }
-    // Each field's hits in one call; then, as complete() does for one hit, the shading normal turned to
-    // the geometric normal's side.
-    void finish_fields() {
-        for (int i = 0; i < fields; ++i) {
-            const HeightField* f = field[i];
-            if (!f) continue;
-            double x[kGroup], y[kGroup], nx[kGroup], ny[kGroup], nz[kGroup];
-            Hit* waiting[kGroup];
-            int n = 0;
-            for (int j = i; j < fields; ++j) {
-                if (field[j] != f) continue;
-                waiting[n] = field_hit[j];
-                x[n] = field_hit[j]->position.x, y[n] = field_hit[j]->position.y;
-                ++n;
-                field[j] = nullptr;
-            }
-            f->sample_normals(x, y, static_cast<std::size_t>(n), nx, ny, nz);
-            for (int k = 0; k < n; ++k) {
-                glm::dvec3 shading(nx[k], ny[k], nz[k]);
-                if (glm::dot(shading, waiting[k]->geometric_normal) < 0.0) shading = -shading;
-                waiting[k]->shading_normal = shading;
-            }
-        }
-        fields = 0;
-    }
-};
-
 void RayTracer::Impl::complete(const glm::dvec3& origin, const glm::dvec3& dir, const RawHit& raw, Hit& out,
-                               DeferredHits* deferred) const {
+                               DeferredHits<kGroup>* deferred) const {
     const GeometryInfo& info = geometries[raw.geom_id];
     const ObjectInstance& inst = *info.instance;
     double t = raw.tfar;
@@ -610,7 +533,7 @@ void RayTracer::Impl::visibility_packet(const RayQuery* queries, int count, std:
 
 void RayTracer::intersect(const RayQuery* queries, std::size_t n, Hit* hits, QueryMode mode) const {
     RawHit raw[kGroup];
-    Impl::DeferredHits deferred;
+    DeferredHits<kGroup> deferred;
     for (std::size_t first = 0; first < n; first += kGroup) {
         const int count = static_cast<int>(std::min<std::size_t>(kGroup, n - first));
         impl_->raw_hits(queries + first, count, mode, raw);   // prefetches the shading-normal records

@@ -42,8 +42,7 @@ SphereHit exact_sphere_hit(const glm::dvec3& center, double radius, const glm::d
 
 namespace {
 
-void scalar_hits(const glm::dvec3& center, double radius, std::size_t first, std::size_t n, const SphereHitLanes& lanes) {
-    const SphereHitLanes& l = lanes;
+void scalar_hits(const glm::dvec3& center, double radius, std::size_t first, std::size_t n, const SphereHitLanes& l) {
     for (std::size_t k = first; k < n; ++k) {
         const SphereHit h = exact_sphere_hit(center, radius, {l.ox[k], l.oy[k], l.oz[k]}, {l.dx[k], l.dy[k], l.dz[k]}, l.t[k]);
         l.t[k] = h.t;
