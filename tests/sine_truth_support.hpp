@@ -83,7 +83,7 @@ inline SinePlane plane_of(const SineSetup& c) {
 // edge is put at a trough: the height field is an open surface, so light passing under a higher edge
 // would meet its back-facing underside from below (at grazing light, where slopes exceed cot t) and be
 // totally reflected far downstream, an artefact of the open edge rather than of the sine.
-inline SineSetup with_water_feeding_floor(SineSetup c) {
+inline SineSetup with_water_feeding_floor(SineSetup c, double margin = 0.05) {
     SinePlane p = plane_of(c);
     double lo = 1e9, hi = -1e9;
     for (int i = 0; i < 4096; ++i) {
@@ -91,9 +91,9 @@ inline SineSetup with_water_feeding_floor(SineSetup c) {
         const SinePlane::Strip st = p.trace(s);
         if (st.front) lo = std::min(lo, st.landing - s), hi = std::max(hi, st.landing - s);
     }
-    const double lo_needed = -0.5 * c.floor_size - hi - 0.05;
+    const double lo_needed = -0.5 * c.floor_size - hi - margin;
     c.water_lo = c.wavelength * (std::floor((lo_needed + 0.25 * c.wavelength) / c.wavelength) - 0.25);   // sin = -1
-    c.water_hi = 0.5 * c.floor_size - lo + 0.05;
+    c.water_hi = 0.5 * c.floor_size - lo + margin;
     return c;
 }
 

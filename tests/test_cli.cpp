@@ -208,7 +208,7 @@ TEST_F(CliTest, RenderWritesFilesAndKeys) {
                           "claim", "baseline_volume"})
         EXPECT_TRUE(m.contains(k)) << k;
     EXPECT_EQ(m.size(), 29u) << m.dump(2);
-    for (const char* k : {"inside", "error_vs_baseline", "reason", "met"}) EXPECT_TRUE(m["claim"].contains(k)) << k;
+    for (const char* k : {"inside", "max_error", "bound", "reason", "bounds", "met"}) EXPECT_TRUE(m["claim"].contains(k)) << k;
     for (const char* t : {"time_ms", "frame_ms"})
         for (const char* k : {"median", "min", "p90", "stdev", "iqr", "ci_rel"}) {
             ASSERT_TRUE(m[t].contains(k)) << t << "." << k;

@@ -7,6 +7,7 @@
 //   m->prepare(scene)                       // once per scene: timed, reported as prepare_ms
 //   per frame: m->update(frame)             // dynamic-geometry work: timed, update_ms
 //              m->render(frame, request)    // timed; warm-up then repeats
+#include <algorithm>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -57,20 +58,52 @@ struct TextureRequest {
     double depth = 1.0;   // [m] below the water's base height
 };
 
-// The accuracy a method claims on one frame of a scene at its current parameters. The conformance suite
-// (tests/test_conformance.cpp) holds every registered method to it on analytic cases: inside the claimed
-// regime, the receiver error against the exact truth (nrmse; after the least-squares scale fit where the
-// output is not radiometric) is at most `error_vs_baseline` times the error of drawing no caustic (the
-// flat interface's irradiance, harness/frame/baseline.hpp). Outside it (`inside` false), `reason` names the
-// bound the frame passes, with the numbers (e.g. "the floor lies 1.2 m down, past the first focus at
-// 0.64 m"): the method still renders, its error is still measured and reported, but nothing is claimed.
-// A case a method cannot render at all is refused by capabilities() instead.
+// One measurable quantity of a frame that bounds a claimed regime: the frame's value as the method measures
+// it and the limit the claim holds to (inside while value <= limit, or >= limit for a lower bound). The
+// conformance suite recomputes the quantities it knows independently of the method (tilt_deg,
+// depth_over_first_focus, ior: tests/conformance_regime.hpp) and checks a case called outside really lies
+// beyond the stated limit; it also widens each bound to check the regime is not wider than the method.
+struct RegimeBound {
+    std::string quantity;   // e.g. "tilt_deg", "depth_over_first_focus", "finest_grid"
+    double value = 0.0;
+    double limit = 0.0;
+    bool upper = true;      // true: inside while value <= limit; false: inside while value >= limit
+    bool holds() const { return upper ? value <= limit : value >= limit; }
+};
+
+// The error a method claims where it states nothing else: an absolute nrmse against the exact truth.
+inline constexpr double kDefaultClaimError = 0.10;
+// The rms ripple allowed where the truth is flat or nearly so (std/mean over the lit bins, or nrmse where
+// half the no-caustic baseline's error is below it).
+inline constexpr double kFlatTolerance = 0.01;
+
+// The accuracy a method claims on one frame of a scene at its current parameters: an absolute bound a user
+// can rely on. Inside the claimed regime the receiver error against the exact truth (nrmse; after the
+// least-squares scale fit where the output is not radiometric) is at most `max_error`, and at most half of
+// the error of drawing no caustic (the flat interface's irradiance, harness/frame/baseline.hpp), whichever is
+// smaller (bound()). The conformance suite (tests/test_conformance.cpp) holds every registered method to it
+// on analytic cases, fixed and randomly drawn. `bounds` lists the measurable quantities that delimit the
+// regime with this frame's values. Outside it (`inside` false), `reason` names the bound the frame passes,
+// with the numbers (e.g. "the floor lies 1.2 m down, past the first focus at 0.64 m"): the method still
+// renders, its error is still measured and reported, but nothing is claimed. A case a method cannot render
+// at all is refused by capabilities() instead.
 struct AccuracyClaim {
     bool inside = true;
-    double error_vs_baseline = 0.5;
+    double max_error = kDefaultClaimError;   // absolute nrmse (after the scale fit for relative outputs)
     std::string reason;
-    static AccuracyClaim within(double factor) { return {true, factor, {}}; }
-    static AccuracyClaim outside(std::string why) { return {false, 0.0, std::move(why)}; }
+    std::vector<RegimeBound> bounds;
+    // The error this frame is held to, given the no-caustic baseline's error against the same truth: the
+    // stated error or half the baseline's, whichever is smaller, but never below kFlatTolerance (where the
+    // truth is nearly flat, an rms ripple of 1 % is allowed, as a flat truth allows std/mean 1 %).
+    double bound(double baseline_error) const {
+        return std::max(std::min(max_error, 0.5 * baseline_error), std::min(max_error, kFlatTolerance));
+    }
+    static AccuracyClaim within(double max_error, std::vector<RegimeBound> bounds = {}) {
+        return {true, max_error, {}, std::move(bounds)};
+    }
+    static AccuracyClaim outside(std::string why, std::vector<RegimeBound> bounds = {}) {
+        return {false, 0.0, std::move(why), std::move(bounds)};
+    }
 };
 
 struct RenderRequest {
@@ -120,10 +153,12 @@ public:
     virtual void prepare(const Scene& /*scene*/) {}
     virtual void update(const FrameGeometry& /*frame*/) {}
     virtual CausticOutput render(const FrameGeometry& frame, const RenderRequest& request) = 0;
-    // The accuracy this method claims on `frame` (asked after update(frame)). The default claims half
-    // the no-caustic baseline's error everywhere, which a method added later is held to until it
-    // states its own regime.
-    virtual AccuracyClaim accuracy_claim(const FrameGeometry& /*frame*/) const { return AccuracyClaim::within(0.5); }
+    // The accuracy this method claims on `frame` (asked after update(frame)). The default claims an nrmse of
+    // kDefaultClaimError (and half the no-caustic baseline's) everywhere, which a method added later is held
+    // to until it states its own regime.
+    virtual AccuracyClaim accuracy_claim(const FrameGeometry& /*frame*/) const {
+        return AccuracyClaim::within(kDefaultClaimError);
+    }
 };
 
 struct MethodInfo {

@@ -22,6 +22,19 @@ json timing_json(const TimingSummary* t) {
             {"ci_rel", t->has_interval ? json_number(t->ci_rel) : json(nullptr)}};
 }
 
+json claim_json(const AccuracyClaim& claim) {
+    json bounds = json::array();
+    for (const RegimeBound& b : claim.bounds)
+        bounds.push_back({{"quantity", b.quantity}, {"value", json_number(b.value)}, {"limit", json_number(b.limit)},
+                          {"upper", b.upper}, {"holds", b.holds()}});
+    return {{"inside", claim.inside},
+            {"max_error", claim.inside ? json_number(claim.max_error) : json(nullptr)},
+            {"bound", nullptr},
+            {"reason", claim.inside ? json(nullptr) : json(claim.reason)},
+            {"bounds", bounds},
+            {"met", nullptr}};
+}
+
 // The metrics.json skeleton: every key of DESIGN.md section 7, values null until measured.
 json metrics_skeleton(const SceneFrame& sf, const ResolvedMethod& m, const RenderOptions& options) {
     json j;
@@ -52,7 +65,8 @@ json metrics_skeleton(const SceneFrame& sf, const ResolvedMethod& m, const Rende
     j["repeats"] = options.repeats;
     j["below_reference_noise"] = nullptr;
     j["no_better_than_flat"] = nullptr;
-    j["claim"] = {{"inside", nullptr}, {"error_vs_baseline", nullptr}, {"reason", nullptr}, {"met", nullptr}};
+    j["claim"] = {{"inside", nullptr}, {"max_error", nullptr}, {"bound", nullptr}, {"reason", nullptr},
+                  {"bounds", json::array()}, {"met", nullptr}};
     j["message"] = "";
     return j;
 }

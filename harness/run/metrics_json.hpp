@@ -2,6 +2,7 @@
 // The metrics.json document of one run (DESIGN.md section 7): its skeleton and JSON helpers.
 #include <nlohmann/json.hpp>
 
+#include <caustics/api/method.hpp>
 #include <caustics/run/render_options.hpp>
 #include <caustics/run/resolved_method.hpp>
 #include <caustics/run/scene_frame.hpp>
@@ -14,6 +15,11 @@ nlohmann::json json_number(double v);
 
 // metrics.json's timing block of one timed section (all null for none).
 nlohmann::json timing_json(const TimingSummary* t);
+
+// metrics.json's claim block: inside, max_error (the stated absolute nrmse), bound (the error the run is held
+// to once the baseline's is known: null until then), reason (outside only), bounds (the regime's quantities
+// with this frame's values and limits) and met (null until judged against an exact truth).
+nlohmann::json claim_json(const AccuracyClaim& claim);
 
 // The metrics.json skeleton: every key of DESIGN.md section 7, values null until measured.
 nlohmann::json metrics_skeleton(const SceneFrame& sf, const ResolvedMethod& m, const RenderOptions& options);

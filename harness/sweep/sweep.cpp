@@ -235,7 +235,8 @@ std::string results_csv(const std::set<std::string>& param_names, const std::vec
     add("error_vs_baseline", {"error", "receiver", "error_vs_baseline"});
     add("no_better_than_flat", {"no_better_than_flat"});
     add("claim_inside", {"claim", "inside"});
-    add("claim_error_vs_baseline", {"claim", "error_vs_baseline"});
+    add("claim_max_error", {"claim", "max_error"});
+    add("claim_bound", {"claim", "bound"});
     add("claim_met", {"claim", "met"});
     add("claim_reason", {"claim", "reason"});
     add("truth", {"truth", "kind"});

@@ -59,6 +59,11 @@ struct ChartMap {
 // The height-field dielectric whose caustics this method draws (capabilities() guarantees one).
 const ObjectInstance* water_surface(const FrameGeometry& frame);
 
+// The claim (accuracy_claim): nrmse <= kClaimError at grid >= kClaimMinGrid while no crest shadows the
+// surface and the receiver lies at most kClaimMaxFocusFraction x the first focus depth down.
+constexpr double kClaimError = 0.10, kClaimMaxFocusFraction = 1.5;
+constexpr int kClaimMinGrid = 256;
+
 class CausticTriangles final : public Method {
 public:
     explicit CausticTriangles(const ParamSet& p)

@@ -195,7 +195,7 @@ void transport(const VolumeD& T, const VolumeF& lap, const TransportInput& in, V
                 // Below the first focus (the shallowest point where refracted rays cross) first-arrival
                 // times no longer describe the light: the discrete front rounds the focus off (its
                 // Laplacian saturates near -0.06 / h on the sine scenes instead of diverging), so the
-                // depth comes from the surface (eikonal_focus.hpp), not from the Laplacian.
+                // depth comes from the surface (blocks/regime/first_focus.hpp), not from the Laplacian.
                 const bool at_focus = layer_past[static_cast<std::size_t>(j) * s.nx + i] != 0;
                 glm::dvec3 t = gradient(T, i, j, k);
                 const double len = glm::length(t);

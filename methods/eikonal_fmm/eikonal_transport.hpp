@@ -22,7 +22,7 @@ struct TransportInput {
     double ior = 1.33;
     bool fresnel = false;               // Fresnel transmittance at the interface
     double absorption = 0.0;            // Ka [1/m] in the water
-    // Depth below the interface's mean height of the first focus (eikonal_focus.hpp); 1e300: none.
+    // Depth below the interface's mean height of the first focus (blocks/regime/first_focus.hpp); 1e300: none.
     double first_focus_depth = 1e300;
     // Optional, finer: each interface vertex's focus depth (focus_depth_map, hf.nx x hf.ny) and the rays'
     // spread about the mean refracted direction (ray_spread). A cell at depth D is then past the first

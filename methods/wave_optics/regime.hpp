@@ -36,8 +36,14 @@ struct Regime {
     double spread = 0.0;         // lateral spread of the light at `depth` over half the period
 };
 
-// Bound on eps inside which the method claims its accuracy.
+// The claim (accuracy_claim): nrmse <= kClaimError where eps <= kMaxEpsilon, the receiver lies at most
+// kMaxFocusFraction of the way to the first focus (blocks/regime), at most kMaxDepthOverFeature feature
+// lengths down, and the light spreads at most one half-period sideways. Measured on 200 drawn cases at the
+// default grid 512: up to 0.4 of the way the worst was 0.099 (8.5 feature lengths down); from 0.4 to 0.6,
+// 9 of 46 cases exceeded 0.10 (up to 0.19), and beyond 0.6 most did (README.md).
 constexpr double kMaxEpsilon = 2.0;
+constexpr double kMaxFocusFraction = 0.4, kMaxDepthOverFeature = 6.0;
+constexpr double kClaimError = 0.10;
 
 // The surface's part: the most negative focusing eigenvalue e_min [1/m] (z_f = -1 / e_min), max |grad h|
 // and max |Hess h| (largest principal curvature) [1/m], by central differences on a height grid

@@ -19,6 +19,7 @@
 
 #include <caustics/util/errors.hpp>
 #include <caustics/blocks/fft/fft.hpp>
+#include <caustics/blocks/regime/first_focus.hpp>
 #include "refracted_screen.hpp"
 #include "regime.hpp"
 #include <caustics/api/registry.hpp>
@@ -301,20 +302,44 @@ public:
                 const glm::dvec2 rel = glm::dvec2(p) - z * beam_walk - glm::dvec2(hf.origin);
                 margin = std::min({margin, rel.x, rel.y, lx_ - rel.x, ly_ - rel.y});
             }
-        if (margin < band) {
+        const Regime r = regime(hf, depth);
+        const caustics::regime::WaterRegime w = caustics::regime::water_regime(frame);
+        std::vector<RegimeBound> bounds = {{"border_margin_m", margin, band, false},
+                                           {"depth_over_first_focus", w.depth_over_first_focus(), kMaxFocusFraction, true},
+                                           {"diffraction_epsilon", r.epsilon, kMaxEpsilon, true},
+                                           {"spread_half_periods", r.spread, 1.0, true},
+                                           {"depth_over_feature_length", w.feature_length > 0.0 ? w.depth / w.feature_length : 0.0,
+                                            kMaxDepthOverFeature, true}};
+        if (!bounds[0].holds()) {
             std::ostringstream s;
             s.precision(3);
             s << "wave_optics: light reaching the receiver enters " << (margin < 0.0 ? "outside the surface" : "through its border band")
               << " (" << margin << " m from its edge; the surface does not tile and is tapered over " << band
               << " m at its edges)";
-            return AccuracyClaim::outside(s.str());
+            return AccuracyClaim::outside(s.str(), bounds);
         }
-        const std::string why = regime_violation(regime(hf, depth));
-        return why.empty() ? AccuracyClaim::within(kClaimFactor) : AccuracyClaim::outside("wave_optics: " + why);
+        if (!bounds[1].holds()) {
+            std::ostringstream s;
+            s.precision(3);
+            s << "wave_optics: the receiver lies " << w.depth << " m below the water, " << bounds[1].value
+              << " of the way to the first focus at " << w.focus.first_focus_depth << " m, beyond " << kMaxFocusFraction
+              << ": near and past the focus the coherent wave's fringes and fold diffraction converge to the "
+                 "geometric irradiance only weakly as the wavelength shrinks";
+            return AccuracyClaim::outside(s.str(), bounds);
+        }
+        if (!bounds[4].holds()) {
+            std::ostringstream s;
+            s.precision(3);
+            s << "wave_optics: the receiver lies " << w.depth << " m below the water, " << bounds[4].value
+              << " x the surface's feature length " << w.feature_length << " m, beyond " << kMaxDepthOverFeature
+              << ": the diffraction of the band-limited wave blurs short features deep down";
+            return AccuracyClaim::outside(s.str(), bounds);
+        }
+        const std::string why = regime_violation(r);
+        return why.empty() ? AccuracyClaim::within(kClaimError, bounds) : AccuracyClaim::outside("wave_optics: " + why, bounds);
     }
 
 private:
-    static constexpr double kClaimFactor = 0.5;
     static double mean_level(const HeightField& hf) {
         double sum = 0.0;
         for (float z : hf.height) sum += z;

@@ -23,6 +23,7 @@
 #include <caustics/frame/frame.hpp>
 #include <caustics/api/registry.hpp>
 #include <caustics/util/timing.hpp>
+#include <caustics/blocks/regime/first_focus.hpp>
 #include <caustics/blocks/volume/volume_grid.hpp>
 #include <caustics/blocks/volume/volume_lookup.hpp>
 #include <caustics/blocks/volume/volume_texture_method.hpp>
@@ -40,8 +41,11 @@ constexpr double kMaxCourant = 0.5773502691896258;  // 1 / sqrt(3): 3-D leapfrog
 // diffraction, so it scales with the Fresnel width; its residue still grew with the grid at 1 + 1.25
 // (sine_ior1: 0.15 % at 128, 0.24 % at 256) and vanishes at 1 + 2 (0.007 %, 0.006 %).
 constexpr double kEdgeRampFresnel = 1.0, kEdgeGapFresnel = 2.0;
-// accuracy_claim: the regime's bounds and the factor on the flat baseline's error (README.md).
-constexpr double kClaimFocusFraction = 0.75, kClaimFresnelRatio = 0.5, kClaimFactor = 0.85;
+// accuracy_claim: the regime's bounds and the nrmse after the scale fit claimed inside it (README.md).
+// Measured on the fixed and 200 drawn cases: even gentle caustics (the 0.5 m sine over 0.2 m, Fresnel ratio
+// 0.06 at grid 128) keep an error after the fit above half the flat baseline's (0.040 against 0.056), so the
+// claim is confined to ratios of 0.05 (in practice: where nothing bends).
+constexpr double kClaimFocusFraction = 0.5, kClaimFresnelRatio = 0.05, kClaimError = 0.25;
 
 
 // cells: phi = 1 on cells the interface crosses (the paper): the interface's range over the cell's
@@ -269,50 +273,25 @@ public:
         const glm::dvec3 t = mean_refracted_direction(*frame.scene, ior_);
         const double h = texture_.shape.spacing;
         const double depth = surface_z_ - (texture_.shape.origin.z + h);  // the deepest receiver
-        const SurfaceScales sc = surface_scales(hf);
-        if (std::fabs(ior_ - 1.0) < 1e-9) return AccuracyClaim::within(kClaimFactor);  // nothing bends: the plane wave is exact
-        // The tangential (nearer) focus of the sharpest crest, along the ray (refraction at a curved
-        // surface: n cos^2 t / f = (n cos t - cos i) kappa), and its depth.
-        const double cos_i = std::fabs(d.z), cos_t = std::fabs(t.z);
-        const double power = (ior_ * cos_t - cos_i) * sc.focusing_curvature;
-        const double focus = power > 0.0 ? ior_ * cos_t * cos_t / power * cos_t : std::numeric_limits<double>::infinity();
-        if (depth > kClaimFocusFraction * focus)
-            return AccuracyClaim::outside("the deepest receiver lies " + fmt(depth) + " m below the surface, past " + fmt(kClaimFocusFraction) +
-                                          " of the first focus at " + fmt(focus) + " m (curvature " + fmt(sc.focusing_curvature) + " /m)");
+        const caustics::regime::SurfaceScales sc = caustics::regime::surface_scales(hf);
+        const caustics::regime::WaterRegime w = caustics::regime::water_regime(frame);
+        const double fraction = w.valid ? w.depth_over_first_focus() : 0.0;
+        const double cos_t = std::fabs(t.z);
         const double lambda = 2.0 * M_PI * pulse_ * h, path = depth / std::max(cos_t, 1e-6);
-        const double ratio = sc.feature > 0.0 ? lambda * path / (sc.feature * sc.feature) : 0.0;
-        if (ratio > kClaimFresnelRatio)
+        // ior = 1: nothing bends, the plane wave is exact whatever the diffraction.
+        const double ratio = std::fabs(ior_ - 1.0) < 1e-9 || sc.feature <= 0.0 ? 0.0 : lambda * path / (sc.feature * sc.feature);
+        std::vector<RegimeBound> bounds = {{"depth_over_first_focus", fraction, kClaimFocusFraction, true},
+                                           {"fresnel_ratio", ratio, kClaimFresnelRatio, true}};
+        (void)d;
+        if (!bounds[0].holds())
+            return AccuracyClaim::outside("the deepest receiver lies " + fmt(depth) + " m below the surface, past " + fmt(kClaimFocusFraction) +
+                                          " of the first focus at " + fmt(w.focus.first_focus_depth) + " m", bounds);
+        if (!bounds[1].holds())
             return AccuracyClaim::outside("the grid's wavelength " + fmt(lambda) + " m (2 pi pulse cells of " + fmt(h) + " m) over the path " +
                                           fmt(path) + " m diffracts beyond the surface's feature scale " + fmt(sc.feature) +
-                                          " m: lambda L / l^2 = " + fmt(ratio) + " > " + fmt(kClaimFresnelRatio) + " (a finer grid lowers it)");
-        return AccuracyClaim::within(kClaimFactor);
-    }
-    struct SurfaceScales {
-        double feature = 0.0;             // 2 pi rms slope / rms curvature (0: flat)
-        double focusing_curvature = 0.0;  // the largest -(smallest Hessian eigenvalue): crests focus
-    };
-    static SurfaceScales surface_scales(const HeightField& hf) {
-        SurfaceScales out;
-        if (hf.nx < 3 || hf.ny < 2 || hf.gradient.size() != hf.height.size()) return out;
-        double slope2 = 0.0, curv2 = 0.0;
-        std::int64_t count = 0;
-        for (int j = 0; j < hf.ny; ++j)
-            for (int i = 0; i < hf.nx; ++i) {
-                const int i0 = std::max(i - 1, 0), i1 = std::min(i + 1, hf.nx - 1);
-                const int j0 = std::max(j - 1, 0), j1 = std::min(j + 1, hf.ny - 1);
-                const glm::dvec2 gx = (glm::dvec2(hf.grad(i1, j)) - glm::dvec2(hf.grad(i0, j))) / ((i1 - i0) * hf.spacing.x);
-                const glm::dvec2 gy = j1 > j0 ? (glm::dvec2(hf.grad(i, j1)) - glm::dvec2(hf.grad(i, j0))) / ((j1 - j0) * hf.spacing.y)
-                                              : glm::dvec2(0.0);
-                const double xx = gx.x, yy = gy.y, xy = 0.5 * (gx.y + gy.x);
-                const double mean = 0.5 * (xx + yy), rad = std::sqrt(0.25 * (xx - yy) * (xx - yy) + xy * xy);
-                out.focusing_curvature = std::max(out.focusing_curvature, -(mean - rad));
-                const glm::dvec2 g(hf.grad(i, j));
-                slope2 += glm::dot(g, g);
-                curv2 += xx * xx + yy * yy + 2.0 * xy * xy;
-                ++count;
-            }
-        if (curv2 > 0.0 && count > 0) out.feature = 2.0 * M_PI * std::sqrt(slope2 / curv2);
-        return out;
+                                          " m: lambda L / l^2 = " + fmt(ratio) + " > " + fmt(kClaimFresnelRatio) + " (a finer grid lowers it)",
+                                          bounds);
+        return AccuracyClaim::within(kClaimError, bounds);
     }
     static std::string fmt(double v) {
         char buf[32];

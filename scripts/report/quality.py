@@ -92,8 +92,52 @@ def scene_lines(q):
                    f"claim_reason says which bound).")
     if q["claim_missed"]:
         counts += (f" **{q['claim_missed']} run(s) missed the accuracy their method claims** "
-                   f"(claim_met false: error above the claimed multiple of the baseline's).")
+                   f"(claim_met false: error above the claimed bound).")
     if q["noise_target_missed"]:
         counts += f" {q['noise_target_missed']} run(s) used a reference that missed its noise target."
     lines.append(counts)
+    return lines
+
+
+def _truthy(series):
+    return series.astype(str).str.strip().str.lower() == "true"
+
+
+def claim_rows(frame, scene):
+    """Per method on one scene: the runs inside its claimed regime, the bound they were held to (claim_bound:
+    the stated absolute nrmse or half the baseline's, the smaller; the largest over the runs) and the worst
+    error measured inside it (nrmse, or nrmse after the fit for relative outputs), with whether every run
+    held. Only runs judged against an exact truth carry a bound; the others show "--"."""
+    runs = ok_runs(frame[frame["scene"] == scene])
+    rows = []
+    if "claim_inside" not in runs:
+        return rows
+    for method, group in runs.groupby("method", sort=True):
+        inside = group[_truthy(group["claim_inside"])]
+        row = {"method": method, "runs": len(group), "inside": len(inside), "stated": None, "bound": None,
+               "worst": None, "held": None}
+        if "claim_max_error" in inside and inside["claim_max_error"].notna().any():
+            row["stated"] = float(inside["claim_max_error"].max())
+        judged = inside[inside["claim_bound"].notna()] if "claim_bound" in inside else inside.iloc[0:0]
+        if not judged.empty:
+            fitted = ~_truthy(judged["radiometric"]) if "radiometric" in judged else False
+            error = judged["nrmse_fit"].where(fitted, judged["nrmse"]) if "nrmse_fit" in judged else judged["nrmse"]
+            row["bound"] = float(judged["claim_bound"].max())
+            row["worst"] = float(error.max())
+            row["held"] = bool((error <= judged["claim_bound"]).all())
+        rows.append(row)
+    return rows
+
+
+def claim_lines(rows):
+    """A markdown table of claim_rows (empty where no method states a claim)."""
+    if not rows:
+        return []
+    f = lambda v: "--" if v is None else f"{v:.3g}"  # noqa: E731
+    lines = ["| method | runs | inside its claim | claimed nrmse | bound held to (largest) | worst error inside | held |",
+             "|---|---|---|---|---|---|---|"]
+    for r in rows:
+        held = "--" if r["held"] is None else ("yes" if r["held"] else "**no**")
+        lines.append(f"| {r['method']} | {r['runs']} | {r['inside']} | {f(r['stated'])} | {f(r['bound'])} | "
+                     f"{f(r['worst'])} | {held} |")
     return lines

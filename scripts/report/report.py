@@ -71,6 +71,11 @@ def main(argv):
     out.append("")
     for scene, check in zip(scenes, checks):
         out += [f"## {scene}", ""] + quality.scene_lines(check) + [""]
+        claims = quality.claim_lines(quality.claim_rows(frame, scene))
+        if claims:
+            out += ["Accuracy claims: each method's claimed nrmse inside its regime, the bound its runs were held "
+                    "to (the claimed nrmse or half the no-caustic baseline's error, whichever is smaller) and the "
+                    "worst error measured inside it on this scene (exact truths only).", ""] + claims + [""]
         made = figures.time_vs_error(frame, scene, fig_dir)
         if made:
             paths, caption = made

@@ -1,13 +1,14 @@
-// First focus of the refracted plane wave under a height field (see eikonal_focus.hpp).
-#include "eikonal_focus.hpp"
+// First focus of the refracted plane wave under a height field, and a frame's water regime (see
+// first_focus.hpp).
+#include <caustics/blocks/regime/first_focus.hpp>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <vector>
 
-#include "eikonal_solver.hpp"
-
-namespace caustics::eikonal {
+namespace caustics::regime {
 namespace {
 
 glm::dvec3 normal_of(const glm::dvec2& g) { return glm::normalize(glm::dvec3(-g.x, -g.y, 1.0)); }
@@ -33,6 +34,13 @@ double smallest_positive_root(double a, double b, double c) {
 }
 
 }  // namespace
+
+glm::dvec3 refract_direction(const glm::dvec3& light, const glm::dvec3& normal, double ior) {
+    // t = eta d + (eta cos_i - cos_t) N, eta = 1 / n.
+    const double eta = 1.0 / ior, cos_i = std::max(0.0, -glm::dot(light, normal));
+    const double cos_t = std::sqrt(std::max(0.0, 1.0 - eta * eta * (1.0 - cos_i * cos_i)));
+    return glm::normalize(eta * light + (eta * cos_i - cos_t) * normal);
+}
 
 FocusAnalysis analyze_focus(const HeightField& hf, const glm::dvec3& light, double ior, double surface_z) {
     FocusAnalysis out;
@@ -96,4 +104,71 @@ double ray_spread(const HeightField& hf, const glm::dvec3& light_in, double ior)
     return spread;
 }
 
-}  // namespace caustics::eikonal
+SurfaceScales surface_scales(const HeightField& hf) {
+    SurfaceScales out;
+    if (hf.nx < 3 || hf.ny < 2 || hf.gradient.size() != hf.height.size()) return out;
+    double slope2 = 0.0, curv2 = 0.0;
+    std::int64_t count = 0;
+    for (int j = 0; j < hf.ny; ++j)
+        for (int i = 0; i < hf.nx; ++i) {
+            const int i0 = std::max(i - 1, 0), i1 = std::min(i + 1, hf.nx - 1);
+            const int j0 = std::max(j - 1, 0), j1 = std::min(j + 1, hf.ny - 1);
+            const glm::dvec2 gx = (glm::dvec2(hf.grad(i1, j)) - glm::dvec2(hf.grad(i0, j))) / ((i1 - i0) * hf.spacing.x);
+            const glm::dvec2 gy = j1 > j0 ? (glm::dvec2(hf.grad(i, j1)) - glm::dvec2(hf.grad(i, j0))) / ((j1 - j0) * hf.spacing.y)
+                                          : glm::dvec2(0.0);
+            const double xx = gx.x, yy = gy.y, xy = 0.5 * (gx.y + gy.x);
+            const double mean = 0.5 * (xx + yy), rad = std::sqrt(0.25 * (xx - yy) * (xx - yy) + xy * xy);
+            out.focusing_curvature = std::max(out.focusing_curvature, -(mean - rad));
+            const glm::dvec2 g(hf.grad(i, j));
+            slope2 += glm::dot(g, g);
+            curv2 += xx * xx + yy * yy + 2.0 * xy * xy;
+            ++count;
+        }
+    if (curv2 > 0.0 && count > 0) out.feature = 2.0 * M_PI * std::sqrt(slope2 / curv2);
+    return out;
+}
+
+WaterRegime water_regime(const FrameGeometry& frame) {
+    WaterRegime r;
+    if (!frame.scene || frame.scene->lights.empty()) return r;
+    for (const ObjectInstance& o : frame.objects)
+        if (o.heightfield && o.object && o.object->material.type == MaterialType::Dielectric) {
+            r.water = &o;
+            break;
+        }
+    if (!r.water) return r;
+    const HeightField& hf = *r.water->heightfield;
+    double sum = 0.0;
+    for (float z : hf.height) sum += z;
+    r.surface_z = hf.height.empty() ? r.water->bounds.center().z : sum / static_cast<double>(hf.height.size());
+    const Light& light = frame.scene->lights.front();
+    const glm::dvec3 dir = light.type == LightType::Point ? glm::normalize(r.water->bounds.center() - light.position)
+                                                          : glm::normalize(light.direction);
+    r.tilt_deg = std::acos(std::clamp(-dir.z, -1.0, 1.0)) * 180.0 / M_PI;
+    r.ior = r.water->object->material.ior;
+    for (const ObjectInstance& o : frame.objects)
+        if (o.object && o.object->material.type == MaterialType::Diffuse && o.bounds.valid() && o.bounds.lo.z < r.surface_z)
+            r.depth = std::max(r.depth, r.surface_z - o.bounds.lo.z);
+    r.focus = analyze_focus(hf, dir, r.ior, r.surface_z);
+    r.feature_length = surface_scales(hf).feature;
+    r.valid = true;
+    return r;
+}
+
+AccuracyClaim claim_within_bounds(std::vector<RegimeBound> bounds, double max_error,
+                                  const std::function<std::string(const RegimeBound&)>& explain) {
+    for (const RegimeBound& b : bounds)
+        if (!b.holds()) {
+            std::string why = explain(b);
+            return AccuracyClaim::outside(std::move(why), std::move(bounds));
+        }
+    return AccuracyClaim::within(max_error, std::move(bounds));
+}
+
+std::string describe(const RegimeBound& b) {
+    char text[160];
+    std::snprintf(text, sizeof text, "%s %.3g %s %.3g", b.quantity.c_str(), b.value, b.upper ? ">" : "<", b.limit);
+    return text;
+}
+
+}  // namespace caustics::regime

@@ -1,0 +1,147 @@
+// The conformance suite on randomly drawn hard cases (tests/conformance_drawn.hpp): every registered method at
+// its defaults on CAUSTICS_CONFORMANCE_CASES drawn sine and Gaussian cases of seed CAUSTICS_CONFORMANCE_SEED
+// (both printed), judged as on the fixed cases (tests/conformance_judge.hpp), and besides:
+//   - the regime quantities a claim lists (RegimeBound) agree with the same quantities computed from the
+//     closed-form surface (conformance_drawn.hpp), so that a case called outside really lies beyond the
+//     stated bound, and a case called inside within it;
+//   - the regime is not wider than the method: with the default seed, widening every bound a case fails by 2x
+//     (the mutation a loose regime would be) brings in a case whose error exceeds the claim, wherever such
+//     a case was drawn (the cases excluded only by regime bounds within 2x of their limits).
+// One test per method, over all drawn cases, which prints the per-case table and a summary: the cases
+// inside, the worst error inside and the bound it was held to (`CAUSTICS_CONFORMANCE_CASES=200` gives the
+// README's figures).
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "conformance_drawn.hpp"
+#include "conformance_judge.hpp"
+
+namespace caustics {
+namespace {
+
+using test_support::DrawnCase;
+using test_support::IndependentRegime;
+using test_support::JudgedRow;
+
+std::vector<std::string> method_names() {
+    std::vector<std::string> names;
+    for (const MethodInfo* info : registered_methods()) names.push_back(info->name);
+    return names;
+}
+
+// The quantity named `name` from the closed form; false for a quantity the suite does not recompute.
+bool independent_value(const std::string& name, const IndependentRegime& r, double& value, double& tolerance) {
+    if (name == "tilt_deg") {
+        value = r.tilt_deg, tolerance = 0.05;
+    } else if (name == "depth_over_first_focus") {
+        value = r.depth_over_first_focus(), tolerance = 0.02 * std::max(value, 0.05);
+    } else if (name == "ior") {
+        value = r.ior, tolerance = 1e-9;
+    } else {
+        return false;
+    }
+    return true;
+}
+
+// Every listed quantity the suite knows is the closed form's, within its tolerance: a case called outside is
+// then beyond the stated limit by the independent value too, and a case called inside within it.
+void check_regime_quantities(const AccuracyClaim& claim, const DrawnCase& c) {
+    for (const RegimeBound& b : claim.bounds) {
+        double truth = 0.0, tol = 0.0;
+        if (!independent_value(b.quantity, c.regime, truth, tol)) continue;
+        EXPECT_NEAR(b.value, truth, tol) << c.name << " (" << c.what << "): the claim measures " << b.quantity << " as "
+                                         << b.value << ", the closed form gives " << truth;
+        if (!b.holds()) {
+            EXPECT_TRUE(b.upper ? truth > b.limit - tol : truth < b.limit + tol)
+                << c.name << ": called outside by " << b.quantity << " " << b.value << " against " << b.limit
+                << ", but the closed form gives " << truth;
+        }
+    }
+}
+
+// Whether every bound the claim fails would hold with its limit widened 2x (upper limits doubled, lower
+// limits halved), and at least one bound fails: a case a 2x looser regime would claim.
+bool inside_when_widened(const AccuracyClaim& claim) {
+    bool any = false;
+    for (const RegimeBound& b : claim.bounds) {
+        if (b.holds()) continue;
+        any = true;
+        const bool widened = b.upper ? (b.limit > 0.0 && b.value <= 2.0 * b.limit) : b.value >= 0.5 * b.limit;
+        if (!widened) return false;
+    }
+    return any;
+}
+
+class ConformanceDrawn : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(ConformanceDrawn, MeetsItsClaimOnDrawnHardCases) {
+    const MethodInfo& info = require_method(GetParam());
+    const std::uint64_t seed = test_support::conformance_seed();
+    const int count = test_support::conformance_case_count();
+    std::printf("CAUSTICS_CONFORMANCE_SEED=%llu CAUSTICS_CONFORMANCE_CASES=%d (%s)\n", static_cast<unsigned long long>(seed),
+                count, info.name.c_str());
+    std::vector<JudgedRow> rows;
+    std::vector<DrawnCase> cases;
+    double render_s = 0.0;
+    for (int i = 0; i < count; ++i) {
+        DrawnCase c = test_support::drawn_case(seed, i);
+        SCOPED_TRACE(c.name + ": " + c.what);
+        const auto t0 = std::chrono::steady_clock::now();
+        JudgedRow row = test_support::judge_case(info, c.name, c.scene, false, false);
+        render_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        row.test_case = c.name;
+        if (!row.refused) check_regime_quantities(row.stated, c);
+        std::string bounds;
+        for (const RegimeBound& b : row.stated.bounds)
+            bounds += " " + b.quantity + "=" + test_support::number(b.value) + (b.upper ? "<=" : ">=") + test_support::number(b.limit);
+        std::printf("%s on %s (%s): nrmse %.4g, baseline %.4g, held to %s; %s; bounds:%s\n", info.name.c_str(),
+                    c.name.c_str(), c.what.c_str(), row.error, row.baseline, test_support::number(row.bound).c_str(),
+                    row.claim.c_str(), bounds.c_str());
+        rows.push_back(row);
+        cases.push_back(std::move(c));
+    }
+    test_support::print_rows(rows);
+
+    int inside = 0, refused = 0;
+    double worst = 0.0, worst_bound = NAN, claimed = 0.0;
+    std::string worst_case = "-";
+    for (const JudgedRow& r : rows) {
+        refused += r.refused;
+        if (r.refused || !r.inside) continue;
+        ++inside;
+        claimed = std::max(claimed, r.max_error);
+        if (r.error > worst) worst = r.error, worst_bound = r.bound, worst_case = r.test_case;
+    }
+    std::printf("summary: %s inside its claim on %d of %d drawn cases (%d refused); worst nrmse inside %.4g on %s "
+                "(held to %s); %.1f s judging\n",
+                info.name.c_str(), inside, count, refused, worst, worst_case.c_str(),
+                test_support::number(worst_bound).c_str(), render_s);
+
+    // The mutation a loose regime would be: every failed bound widened 2x. Where that brings cases in, one of
+    // them must miss the claim the method states inside (else the regime is narrower than its model).
+    if (claimed == 0.0) claimed = kDefaultClaimError;
+    int brought_in = 0, missed = 0;
+    for (const JudgedRow& r : rows) {
+        if (r.refused || r.inside || !std::isfinite(r.error) || !inside_when_widened(r.stated)) continue;
+        ++brought_in;
+        missed += r.error > std::min(claimed, 0.5 * r.baseline);
+    }
+    std::printf("mutation: a 2x wider regime brings in %d case(s), %d of which miss the claimed nrmse %.3g\n", brought_in,
+                missed, claimed);
+    if (seed == test_support::kDefaultConformanceSeed && brought_in > 0) {
+        EXPECT_GT(missed, 0) << info.name << ": its regime widened 2x still holds on the " << brought_in
+                             << " drawn case(s) it brings in: the regime is narrower than the method";
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(EveryMethod, ConformanceDrawn, ::testing::ValuesIn(method_names()),
+                         [](const auto& info) { return info.param; });
+
+}  // namespace
+}  // namespace caustics
