@@ -78,6 +78,18 @@ inline std::vector<Rendered> render_case(const MethodInfo& info, const std::map<
     return out;
 }
 
+// The claim `info` states at its defaults on frame 0 of `scene` (prepare and update, no render); a refused
+// scene gives an outside claim with the refusal as its reason.
+inline AccuracyClaim claim_only(const MethodInfo& info, const Scene& scene) {
+    std::unique_ptr<Method> method = info.create(ParamSet::resolve(info.name, info.params, {}));
+    const Capability cap = method->capabilities(scene);
+    if (!cap.supported) return AccuracyClaim::outside("refused: " + cap.reason);
+    const FrameGeometry frame = build_frame_geometry(scene, 0);
+    method->prepare(scene);
+    method->update(frame);
+    return method->accuracy_claim(frame);
+}
+
 inline bool identical(const Image& a, const Image& b) {
     return a.width == b.width && a.height == b.height && a.channels == b.channels && a.pixels == b.pixels;
 }
