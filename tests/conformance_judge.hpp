@@ -146,7 +146,9 @@ inline JudgedRow judge_case(const MethodInfo& info, const std::string& case_name
     const AnalyticTruth truth = analytic_truth(frame, chart);
     EXPECT_TRUE(truth.available) << case_name << ": " << truth.reason;
     if (!truth.available) return row;
-    if (flat_truth) EXPECT_LT(flatness(truth.receiver, truth.receiver), 1e-3) << "the case's truth is not flat";
+    if (flat_truth) {
+        EXPECT_LT(flatness(truth.receiver, truth.receiver), 1e-3) << "the case's truth is not flat";
+    }
     // What drawing no caustic scores: the flat interface's irradiance, or the best constant (solids).
     const Image baseline = make_baseline(flat_interface_baseline(frame, chart), truth.receiver).map;
 
