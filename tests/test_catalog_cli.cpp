@@ -87,6 +87,16 @@ const std::vector<CatalogCase>& cases() {
         {"RenderPhotonsBelowSpecBound", [](const CaseDir& d) {
              return Probe{render_args(d, {"--photons", "999"}), {"--photons", "999 is out of range", "1000"}};
          }},
+        {"PhotonCapBelowPhotons", [](const CaseDir& d) {
+             return Probe{reference_args(d, {"--photons", "20000", "--photon-cap", "10000"}),
+                          {"--photon-cap", "10000 is below --photons 20000", "at least the first round's"}};
+         }},
+        {"PhotonCapBelowPhotonsGivenFirst", [](const CaseDir& d) {
+             return Probe{with({"reference", small_scene(d), "--photon-cap", "10000", "--photons", "20000", "--out", d.out(),
+                                "--cache", d.cache()},
+                               {}),
+                          {"--photon-cap", "below --photons 20000"}};
+         }},
         {"SeedNegative", [](const CaseDir& d) {
              return Probe{reference_args(d, {"--seed", "-1"}),
                           {"--seed", "-1 is out of range", "valid: an integer from 0 to 4611686018427387904"}};

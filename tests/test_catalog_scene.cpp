@@ -109,14 +109,16 @@ std::string floats(const std::vector<float>& v) {
     return s;
 }
 
-// A minimal binary glTF: one mesh named `name` with one non-indexed triangle (POSITION and NORMAL).
-std::string glb_triangle(const std::string& name, const std::vector<float>& positions, const std::vector<float>& normals) {
+// A minimal binary glTF: one mesh named `name` with one non-indexed triangle (POSITION and NORMAL), under the
+// node graph `nodes` (default: one node holding the mesh).
+std::string glb_triangle(const std::string& name, const std::vector<float>& positions, const std::vector<float>& normals,
+                         const json& nodes = json::array({{{"mesh", 0}}})) {
     const std::string bin = floats(positions) + floats(normals);
     const json gltf = {
         {"asset", {{"version", "2.0"}}},
         {"scene", 0},
         {"scenes", {{{"nodes", {0}}}}},
-        {"nodes", {{{"mesh", 0}}}},
+        {"nodes", nodes},
         {"meshes", {{{"name", name}, {"primitives", {{{"attributes", {{"POSITION", 0}, {"NORMAL", 1}}}}}}}}},
         {"accessors",
          {{{"bufferView", 0}, {"componentType", 5126}, {"count", 3}, {"type", "VEC3"}},
@@ -294,6 +296,20 @@ std::vector<SceneCase> cases() {
              add_mesh(s, "nan.glb");
          },
          {"objects[2].file", "nan.glb", "'shard'", "POSITION 1", "valid:"}},
+        // A node graph that is not a tree: node k lists node k + 1 twice, 40 levels down (2^40 visits; the
+        // loader limited the depth, not the visits, and hung with memory growing).
+        {"GlbNodeListedTwice40Deep",
+         [](json& s, const CaseDir& d) {
+             json nodes = json::array();
+             for (int k = 0; k < 40; ++k) nodes.push_back({{"children", {k + 1, k + 1}}});
+             nodes.push_back({{"mesh", 0}});
+             d.write("dag.glb", glb_triangle("shard", {0, 0, 0, 0.1f, 0, 0, 0, 0.1f, 0}, {0, 0, 1, 0, 0, 1, 0, 0, 1}, nodes));
+             add_mesh(s, "dag.glb");
+         },
+         {"objects[2].file", "dag.glb", "reached twice"}},
+        // A vector value nested 100,000 deep (the message serialised it recursively: SIGSEGV).
+        {"VectorNested100000Deep", [](json& s, const CaseDir&) { s["camera"]["up"] = "DEEP_PLACEHOLDER"; },
+         {"camera.up", "nested deeper than 64"}},
         {"GlbInfiniteNormal",
          [](json& s, const CaseDir& d) {
              d.write("inf.glb", glb_triangle("shard", {0, 0, 0, 0.1f, 0, 0, 0, 0.1f, 0}, {0, 0, 1, kInf, 0, 1, 0, 0, 1}));
@@ -310,6 +326,10 @@ std::string write_case_scene(const SceneCase& c, const CaseDir& d) {
     std::string text = s.dump(2);
     const std::string placeholder = "\"INF_PLACEHOLDER\"";
     if (const auto at = text.find(placeholder); at != std::string::npos) text.replace(at, placeholder.size(), "1e999");
+    // Written as text: building a value that deep as a json would itself recurse that deep.
+    const std::string deep = "\"DEEP_PLACEHOLDER\"";
+    if (const auto at = text.find(deep); at != std::string::npos)
+        text.replace(at, deep.size(), std::string(100000, '[') + "0" + std::string(100000, ']'));
     return d.write("scene.json", text);
 }
 

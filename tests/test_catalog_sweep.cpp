@@ -201,6 +201,31 @@ const std::vector<SpecCase>& spec_cases() {
              return s;
          },
          {}, {"timing.repeat", "valid keys"}},
+        {"unknown_key_nested_in_report",
+         [](const CaseDir&) {
+             json s = tiny_spec();
+             s["report"] = {{"time_budget_ms", 16.7}, {"error_targets", 0.1}};
+             return s;
+         },
+         {}, {"report.error_targets", "valid keys", "error_target"}},
+        {"report_paper_settings_not_an_object",
+         [](const CaseDir&) {
+             json s = tiny_spec();
+             s["report"] = {{"paper_settings", {{"caustic_triangles", 256}}}};
+             return s;
+         },
+         {}, {"report.paper_settings.caustic_triangles", "must be an object"}},
+        {"photon_cap_below_photons",
+         [](const CaseDir&) {
+             json s = tiny_spec();
+             s["reference"]["photons"] = 200000;
+             s["reference"]["photon_cap"] = 100000;
+             return s;
+         },
+         {}, {"reference.photon_cap", "100000", "200000"}},
+        {"shard_empty", [](const CaseDir&) { return tiny_spec(); }, {"--shard", ""}, {"--shard", "'' is not I/N"}},
+        {"spec_not_an_object", [](const CaseDir&) { return json::array({"sine"}); }, {},
+         {"must be a JSON object", "scenes", "an array of 1 element"}},
     };
     return cases;
 }

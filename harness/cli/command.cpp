@@ -1,6 +1,7 @@
 #include "command.hpp"
 
 #include <algorithm>
+#include <cstdlib>
 
 #include <caustics/util/errors.hpp>
 #include <caustics/api/params.hpp>
@@ -68,9 +69,20 @@ void add_reference_options(CLI::App& app, ReferenceSettings& s) {
                       "Add reference photons in rounds until its noise_nrmse is at most this (0: fixed --photons)",
                       "0: fixed --photons")
         ->capture_default_str();
+    // A cap below the first round's photons could never be met: refused when parsed. CLI11 checks the
+    // options in the order they are declared, after --photons has taken its value.
     add_integer_option(app, "--photon-cap", s.photon_cap, RS::kMinPhotons, RS::kMaxPhotons,
-                       "Most photons a noise target may use (then reported as not met)")
-        ->capture_default_str();
+                       "Most photons a noise target may use (then reported as not met); at least --photons")
+        ->capture_default_str()
+        ->check(CLI::Validator(
+            [&s](std::string& text) -> std::string {
+                const unsigned long long cap = std::strtoull(text.c_str(), nullptr, 10);
+                if (cap < s.photons)
+                    return text + " is below --photons " + std::to_string(s.photons) +
+                           ": the cap must be at least the first round's photons";
+                return {};
+            },
+            "at least --photons"));
 }
 
 }  // namespace caustics::cli

@@ -116,7 +116,8 @@ Command make_sweep_command() {
         app.add_flag("--dry-run", *dry_run,
                      "List the planned runs and their count per method; run and write nothing (with --slurm: "
                      "write the job scripts, submit nothing)");
-        app.add_option("--shard", *shard, "Run shard I of N (I/N) into DIR/shards/I; `sweep merge DIR` joins them");
+        CLI::Option* shard_option =
+            app.add_option("--shard", *shard, "Run shard I of N (I/N) into DIR/shards/I; `sweep merge DIR` joins them");
         app.add_flag("--references-only", o->references_only,
                      "Compute the references the sweep needs (shard I of N of them with --shard) and run nothing");
         app.add_flag("--isolate-runs", o->isolate_runs,
@@ -125,7 +126,7 @@ Command make_sweep_command() {
         app.add_option("--slurm", *slurm, "Write and submit Slurm job arrays: references, N run tasks, merge + report")
             ->check(CLI::Range(1, kMaxShards));
         app.add_option("--slurm-args", *slurm_args, "Extra sbatch arguments for every job, e.g. \"--partition=cpu\"");
-        return [o, dry_run, shard, slurm, slurm_args, folder, merge, status]() {
+        return [o, dry_run, shard, shard_option, slurm, slurm_args, folder, merge, status]() {
             if (merge->parsed()) {
                 const MergeSummary m = merge_shards(*folder);
                 std::cout << "sweep: merged " << m.shards << " shards, " << m.runs << " runs into "
@@ -139,7 +140,8 @@ Command make_sweep_command() {
             if (o->spec_path.empty())
                 throw InputError("sweep", "spec", "a sweep spec (JSON) is required, e.g. scripts/sweeps/quick.json; "
                                                   "or `sweep merge DIR` / `sweep status DIR`");
-            if (!shard->empty()) o->shard = parse_shard(*shard);
+            // An empty --shard is refused rather than taken as no shard (it ran the whole sweep).
+            if (shard_option->count() > 0) o->shard = parse_shard(*shard);
             if (*slurm > 0) return slurm_command(*o, *slurm, *slurm_args, *dry_run);
             return *dry_run ? list_planned_runs(*o) : run_sweep_command(*o);
         };

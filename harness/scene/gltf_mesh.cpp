@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -220,9 +221,16 @@ TriangleMesh load_gltf_mesh(const std::string& path, std::vector<std::string>* d
     }
 
     Accumulator acc;
+    // glTF 2.0 nodes form disjoint strict trees (no node has two parents, no cycles): a node reached twice is
+    // refused, which bounds the visits by the node count (a node listing its child twice, repeated 40 levels
+    // down, would otherwise be 2^40 visits).
+    std::vector<std::uint8_t> reached(model.nodes.size(), 0);
     std::function<void(int, const glm::dmat4&, int)> visit = [&](int node_index, const glm::dmat4& parent, int depth) {
         if (node_index < 0 || static_cast<std::size_t>(node_index) >= model.nodes.size()) bad(path, "node index out of range");
         if (depth > 256) bad(path, "node hierarchy too deep (a cycle?)");
+        if (reached[static_cast<std::size_t>(node_index)]++)
+            bad(path, "node " + std::to_string(node_index) +
+                          " is reached twice: the glTF node hierarchy must be a set of trees (each node one parent at most)");
         const tinygltf::Node& node = model.nodes[static_cast<std::size_t>(node_index)];
         const glm::dmat4 m = parent * node_matrix(node);
         if (node.mesh >= 0) add_mesh(model, node.mesh, m, path, acc);

@@ -421,48 +421,6 @@ Medium parse_medium(const JsonNode& n) {
     return m;
 }
 
-// A parser callback that rejects a key repeated inside one JSON object (nlohmann would silently keep
-// one of them), naming its key path.
-nlohmann::json::parser_callback_t duplicate_key_check(const std::string& path) {
-    struct Level {
-        bool object = false;
-        std::set<std::string> keys;
-        std::string key;
-        std::size_t index = 0;
-    };
-    auto stack = std::make_shared<std::vector<Level>>();
-    return [stack, path](int, nlohmann::json::parse_event_t event, nlohmann::json& parsed) {
-        using E = nlohmann::json::parse_event_t;
-        auto element_done = [&] {
-            if (!stack->empty() && !stack->back().object) ++stack->back().index;
-        };
-        switch (event) {
-        case E::object_start: stack->push_back({true, {}, {}, 0}); break;
-        case E::array_start: stack->push_back({false, {}, {}, 0}); break;
-        case E::object_end:
-        case E::array_end:
-            if (!stack->empty()) stack->pop_back();
-            element_done();
-            break;
-        case E::value: element_done(); break;
-        case E::key: {
-            Level& top = stack->back();
-            top.key = parsed.get<std::string>();
-            if (!top.keys.insert(top.key).second) {
-                std::string key_path;
-                for (const Level& l : *stack) {
-                    if (l.object) key_path += (key_path.empty() ? "" : ".") + l.key;
-                    else key_path.append("[").append(std::to_string(l.index)).append("]");
-                }
-                throw InputError(path, key_path, "duplicate key: each key may appear once in an object");
-            }
-            break;
-        }
-        }
-        return true;
-    };
-}
-
 std::string read_file(const std::string& path) {
     std::error_code ec;
     if (!fs::exists(path, ec)) throw InputError(path, "", "the scene file does not exist");
@@ -483,13 +441,7 @@ Scene load_scene(const std::string& path) {
     scene.name = fs::path(path).stem().string();
     scene.source_text = read_file(path);
 
-    nlohmann::json root;
-    try {
-        root = nlohmann::json::parse(scene.source_text, duplicate_key_check(path));
-    } catch (const nlohmann::json::exception& e) {
-        // parse_error carries "at line L, column C"; out_of_range 406 is a number literal that overflows.
-        throw InputError(path, "", std::string("not valid JSON: ") + e.what());
-    }
+    const nlohmann::json root = parse_json_strict(scene.source_text, path);
     const JsonNode top(path, root);
     top.check_keys({"description", "fresnel", "max_specular_depth", "lights", "camera", "objects", "medium",
                     "receiver", "animation"});

@@ -12,6 +12,7 @@
 #include <unordered_set>
 
 #include <caustics/util/errors.hpp>
+#include <caustics/util/json_reader.hpp>
 #include <caustics/api/registry.hpp>
 #include <caustics/scene/scene_catalog.hpp>
 
@@ -23,31 +24,6 @@ std::vector<json> expand_axis_values(const json& value, const std::string& file,
 
 namespace {
 
-// nlohmann keeps the last of duplicate keys silently; a duplicated axis is almost always a mistake in
-// a hand-written spec, so the parser callback rejects it with the key path.
-json parse_rejecting_duplicates(const std::string& text, const std::string& file) {
-    std::vector<std::set<std::string>> seen;
-    std::vector<std::string> path;
-    auto callback = [&](int /*depth*/, json::parse_event_t event, json& parsed) {
-        switch (event) {
-        case json::parse_event_t::object_start: seen.emplace_back(); break;
-        case json::parse_event_t::object_end: seen.pop_back(); break;
-        case json::parse_event_t::key: {
-            const std::string key = parsed.get<std::string>();
-            if (!seen.back().insert(key).second) throw InputError(file, key, "duplicate key");
-            break;
-        }
-        default: break;
-        }
-        return true;
-    };
-    try {
-        return json::parse(text, callback);
-    } catch (const json::parse_error& e) {
-        throw InputError(file, "", std::string("not valid JSON: ") + e.what());
-    }
-}
-
 void check_keys(const json& object, const std::set<std::string>& valid, const std::string& file,
                 const std::string& where) {
     for (const auto& [key, value] : object.items()) {
@@ -55,6 +31,34 @@ void check_keys(const json& object, const std::set<std::string>& valid, const st
         std::string list;
         for (const auto& v : valid) list += (list.empty() ? "" : ", ") + v;
         throw InputError(file, where.empty() ? key : where + "." + key, "unknown key; valid keys: " + list);
+    }
+}
+
+// The report block (scripts/report/report.py reads it): its keys and their kinds.
+void check_report(const json& report, const std::string& file) {
+    if (!report.is_object())
+        throw InputError(file, "report", "must be an object of report settings (time_budget_ms, error_target, "
+                                         "noise_ratio_target, paper_settings, image_settings), not " + describe_json(report));
+    check_keys(report, {"time_budget_ms", "error_target", "noise_ratio_target", "paper_settings", "image_settings"}, file,
+               "report");
+    for (const char* key : {"time_budget_ms", "error_target", "noise_ratio_target"})
+        if (report.contains(key) && (!report[key].is_number() || !(report[key].get<double>() > 0.0) ||
+                                     !std::isfinite(report[key].get<double>())))
+            throw InputError(file, std::string("report.") + key, "must be a finite number > 0, not " + describe_json(report[key]));
+    for (const char* key : {"paper_settings", "image_settings"}) {
+        if (!report.contains(key)) continue;
+        const json& settings = report[key];
+        const std::string where = std::string("report.") + key;
+        if (!settings.is_object())
+            throw InputError(file, where, "must be an object {method: {parameter: value}}, not " + describe_json(settings));
+        for (const auto& [method, params] : settings.items()) {
+            if (!params.is_object())
+                throw InputError(file, where + "." + method, "must be an object {parameter: value}, not " + describe_json(params));
+            for (const auto& [param, value] : params.items())
+                if (value.is_object() || value.is_array())
+                    throw InputError(file, where + "." + method + "." + param,
+                                     "must be a number, string or boolean, not " + describe_json(value));
+        }
     }
 }
 
@@ -295,8 +299,12 @@ SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string
     if (!in) throw InputError(path, "", "cannot read sweep spec (missing or unreadable file)");
     std::stringstream buffer;
     buffer << in.rdbuf();
-    json root = parse_rejecting_duplicates(buffer.str(), path);
-    if (!root.is_object()) throw InputError(path, "", "a sweep spec is a JSON object");
+    // nlohmann keeps the last of duplicate keys silently; a duplicated axis is almost always a mistake in a
+    // hand-written spec, so parse_json_strict rejects it with the key path (and nesting past kMaxJsonDepth).
+    json root = parse_json_strict(buffer.str(), path);
+    if (!root.is_object())
+        throw InputError(path, "", "must be a JSON object with the keys scenes and methods (and optionally description, "
+                                   "frames, reference, truth, timing, report), not " + describe_json(root));
     check_keys(root, {"description", "scenes", "frames", "reference", "truth", "timing", "methods", "report"}, path, "");
     const auto require_number = [&](const json& v, const std::string& key, double lo, double hi) {
         if (!v.is_number() || !(v.get<double>() >= lo && v.get<double>() <= hi))
@@ -339,8 +347,7 @@ SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string
     SweepSpec spec;
     spec.path = path;
     spec.as_run = root;
-    if (root.contains("report") && !root["report"].is_object())
-        throw InputError(path, "report", "must be an object of report settings (see scripts/report/report.py)");
+    if (root.contains("report")) check_report(root["report"], path);
     if (root.contains("description")) {
         if (!root["description"].is_string()) throw InputError(path, "description", "must be a string");
         spec.description = root["description"].get<std::string>();
@@ -402,6 +409,10 @@ SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string
             throw InputError(path, "reference.sampler", "must be \"sobol\" or \"independent\"");
         if (r.contains("photons")) s.photons = static_cast<std::uint64_t>(require_integer(r["photons"], path, "reference.photons", RS::kMinPhotons, RS::kMaxPhotons));
         if (r.contains("seed")) s.seed = static_cast<std::uint64_t>(require_integer(r["seed"], path, "reference.seed", 0, RS::kMaxSeed));
+        if (s.photon_cap < s.photons)
+            throw InputError(path, "reference.photon_cap",
+                             "is " + std::to_string(s.photon_cap) + ", below reference.photons " + std::to_string(s.photons) +
+                                 ": the cap must be at least the first round's photons");
     }
     if (root.contains("timing")) {
         const json& t = root["timing"];

@@ -12,6 +12,20 @@
 
 namespace caustics {
 
+// The deepest nesting of arrays and objects an input file may have (scene files and sweep specs nest a few
+// levels); deeper input is refused before it is used, so no later step recurses through it.
+inline constexpr std::size_t kMaxJsonDepth = 64;
+// The most characters of a string value a message quotes.
+inline constexpr std::size_t kMaxQuotedChars = 60;
+
+// Parses an input file's text: InputError(file, "", ...) for invalid JSON, InputError(file, key path, ...) for
+// a key repeated inside one object (nlohmann would silently keep one) or nesting deeper than kMaxJsonDepth.
+nlohmann::json parse_json_strict(const std::string& text, const std::string& file);
+
+// A value in a message: strings (cut to kMaxQuotedChars), numbers and booleans as written, arrays and objects
+// by kind and size only (never serialised: they can be arbitrarily large or deep).
+std::string describe_json(const nlohmann::json& value);
+
 class JsonNode {
 public:
     JsonNode(const std::string& file, const nlohmann::json& value, std::string path = {})
