@@ -164,6 +164,32 @@ const std::vector<CatalogCase>& cases() {
              fs::create_symlink("loop_a", d.path() / "loop_b");
              return Probe{reference_args(d, {"--out", d.file("loop_a") + "/out"}), {"--out", "loop_a", "symbolic link loop"}};
          }},
+        {"OutDanglingSymlink", [](const CaseDir& d) {   // was accepted: the reference was computed and cached first
+             fs::create_symlink("nowhere", d.path() / "dangling");
+             return Probe{reference_args(d, {"--out", d.file("dangling")}), {"--out", "dangling", "nowhere", "does not exist"}};
+         }},
+        // view --screenshot: checked before a window opens (an empty name opened one that never exited).
+        {"ScreenshotEmpty", [](const CaseDir& d) {
+             return Probe{{"view", small_scene(d), "--screenshot", "", "--cache", d.cache()}, {"--screenshot", "empty path"}};
+         }},
+        {"ScreenshotInMissingFolder", [](const CaseDir& d) {
+             return Probe{{"view", small_scene(d), "--screenshot", d.file("missing") + "/shot.png", "--cache", d.cache()},
+                          {"--screenshot", "missing", "does not exist"}};
+         }},
+        {"ScreenshotIsAFolder", [](const CaseDir& d) {
+             fs::create_directories(d.path() / "shots");
+             return Probe{{"view", small_scene(d), "--screenshot", d.file("shots"), "--cache", d.cache()},
+                          {"--screenshot", "shots", "is a folder"}};
+         }},
+        {"ScreenshotUnderAFile", [](const CaseDir& d) {
+             const std::string file = d.write("shot_file", "not a folder");
+             return Probe{{"view", small_scene(d), "--screenshot", file + "/shot.png", "--cache", d.cache()},
+                          {"--screenshot", "shot_file"}};
+         }},
+        {"ScreenshotInProc", [](const CaseDir& d) {
+             return Probe{{"view", small_scene(d), "--screenshot", "/proc/caustics_shot.png", "--cache", d.cache()},
+                          {"--screenshot", "/proc"}};
+         }},
         {"RenderOutIsAFile", [](const CaseDir& d) {
              const std::string file = d.write("out_file", "not a folder");
              return Probe{{"render", small_scene(d), "--method", "caustic_triangles", "--no-reference", "--repeats", "1",

@@ -36,7 +36,8 @@ Command make_view_command() {
         add_reference_options(app, a->reference);
         add_cache_option(app, a->cache);
         app.add_flag("--no-reference", a->no_reference, "no reference (no reference, difference or error)");
-        app.add_option("--screenshot", a->screenshot, "write the window as PNG (and FILE.json) after --frames frames, then exit");
+        add_output_file_option(app, "--screenshot", a->screenshot,
+                               "write the window as PNG (and FILE.json) after --frames frames, then exit");
         app.add_option("--frames", a->frames, "frames (each: update + render) before the screenshot")
             ->check(CLI::Range(1, 100000));
         app.add_option("--space", a->space, "the panes' space to start with (default: volume where the medium scatters, else receiver)")

@@ -290,6 +290,16 @@ void check_output_folder(const std::string& option, const std::string& path) {
     for (fs::path p = absolute.lexically_normal(); !p.empty(); p = p.parent_path()) {
         const fs::file_status st = fs::status(p, ec);
         const bool self = p == absolute.lexically_normal();
+        // A dangling symbolic link neither exists nor can be created as a folder (creating it fails only
+        // after the work: a reference computed and cached first).
+        std::error_code link_ec;
+        if (!fs::exists(st) && fs::is_symlink(fs::symlink_status(p, link_ec))) {
+            const std::string target = fs::read_symlink(p, link_ec).string();
+            throw invalid_value(option,
+                                path + (self ? " is" : " lies under " + p.string() + ", which is") +
+                                    " a symbolic link to " + target + ", which does not exist",
+                                valid);
+        }
         if (is_loop(ec)) {
             // Name the outermost link of the loop: "out/loop/sub" lies under "out/loop".
             fs::path loop = p;
@@ -319,6 +329,33 @@ void check_output_folder(const std::string& option, const std::string& path) {
         if (p == p.root_path()) break;
     }
     throw invalid_value(option, path + " cannot be created", valid);
+}
+
+void check_output_file(const std::string& option, const std::string& path) {
+    const std::string valid = "a file path in an existing writable folder, not a folder, outside /proc and /sys";
+    if (path.empty()) throw invalid_value(option, "empty path", valid);
+    std::error_code ec;
+    const fs::path absolute = fs::absolute(path, ec).lexically_normal();
+    if (ec) throw invalid_value(option, path + ": " + ec.message(), valid);
+    if (fs::is_directory(fs::status(absolute, ec)))
+        throw invalid_value(option, path + " is a folder, not a file", valid);
+    const fs::path folder = absolute.parent_path();
+    const fs::file_status st = fs::status(folder, ec);
+    if (!fs::exists(st)) throw invalid_value(option, path + ": the folder " + folder.string() + " does not exist", valid);
+    // The folder passes the output-folder checks (not a file, in /proc or /sys, writable).
+    check_output_folder(option, folder.string());
+}
+
+CLI::Option* add_output_file_option(CLI::App& app, const std::string& name, std::string& value, const std::string& doc) {
+    CLI::Option* option = app.add_option(name, value, doc);
+    option->check(CLI::Validator(
+        [name](std::string& text) {
+            check_output_file(name, text);
+            return std::string();
+        },
+        "FILE"));
+    set_valid_text(option, [] { return std::string("a file path in an existing writable folder, not a folder"); });
+    return option;
 }
 
 CLI::Option* add_output_folder_option(CLI::App& app, const std::string& name, std::string& value, const std::string& doc) {

@@ -86,4 +86,9 @@ CLI::Option* add_output_folder_option(CLI::App& app, const std::string& name, st
 // The same check of a folder chosen by the program (a default --out); throws InputError naming `option`.
 void check_output_folder(const std::string& option, const std::string& path);
 
+// An output file (--screenshot): not empty, not a folder, in an existing folder that passes the output
+// folder's checks. Checked as given, before any work.
+CLI::Option* add_output_file_option(CLI::App& app, const std::string& name, std::string& value, const std::string& doc);
+void check_output_file(const std::string& option, const std::string& path);
+
 }  // namespace caustics::cli
