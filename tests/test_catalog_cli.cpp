@@ -164,6 +164,23 @@ const std::vector<CatalogCase>& cases() {
              fs::create_symlink("loop_a", d.path() / "loop_b");
              return Probe{reference_args(d, {"--out", d.file("loop_a") + "/out"}), {"--out", "loop_a", "symbolic link loop"}};
          }},
+        // caustics report on a results.csv that is not a sweep's (a pandas traceback, or a message not in the
+        // "caustics: error:" form).
+        {"ReportEmptyResults", [](const CaseDir& d) {
+             fs::create_directories(d.path() / "sweep");
+             d.write("sweep/results.csv", "");
+             return Probe{{"report", d.file("sweep")}, {"results.csv", "is empty"}};
+         }},
+        {"ReportGarbageResults", [](const CaseDir& d) {
+             fs::create_directories(d.path() / "sweep");
+             d.write("sweep/results.csv", std::string("\x89PNG\r\n\x1a\n\0\0garbage", 17));
+             return Probe{{"report", d.file("sweep")}, {"results.csv", "has no column run_id"}};
+         }},
+        {"ReportHeaderOnlyResults", [](const CaseDir& d) {
+             fs::create_directories(d.path() / "sweep");
+             d.write("sweep/results.csv", "run_id,scene,method,status,time_ms_median,nrmse,radiometric\n");
+             return Probe{{"report", d.file("sweep")}, {"results.csv", "a header and no run"}};
+         }},
         {"OutDanglingSymlink", [](const CaseDir& d) {   // was accepted: the reference was computed and cached first
              fs::create_symlink("nowhere", d.path() / "dangling");
              return Probe{reference_args(d, {"--out", d.file("dangling")}), {"--out", "dangling", "nowhere", "does not exist"}};

@@ -8,6 +8,9 @@
 
 #include <cerrno>
 #include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
 #include <vector>
 
 #include <caustics/util/errors.hpp>
@@ -49,6 +52,37 @@ int run_tied_child(const std::vector<std::string>& argv, bool quiet) {
     return WIFEXITED(status) ? WEXITSTATUS(status) : 1;
 }
 
+// The results.csv a sweep writes: a header with the columns the report reads, and at least one run. Checked
+// before the script starts, so that an empty, truncated or foreign file is refused with exit 2 and one
+// message rather than a traceback.
+void check_results_csv(const std::string& dir) {
+    const fs::path path = fs::path(dir) / "results.csv";
+    const std::string valid = "the results.csv a sweep writes: a header (run_id, scene, method, status, ...) and a row per run";
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw InputError(path.string(), "", "cannot be read; valid: " + valid);
+    std::string header;
+    if (!std::getline(in, header) || header.empty()) throw InputError(path.string(), "", "is empty; valid: " + valid);
+    std::set<std::string> columns;
+    std::stringstream fields(header);
+    for (std::string field; std::getline(fields, field, ',');) {
+        if (!field.empty() && field.back() == '\r') field.pop_back();
+        if (field.size() >= 2 && field.front() == '"' && field.back() == '"') field = field.substr(1, field.size() - 2);
+        columns.insert(field);
+    }
+    std::string missing;
+    for (const char* c : {"run_id", "scene", "method", "status", "time_ms_median", "nrmse", "radiometric"})
+        if (!columns.count(c)) missing += (missing.empty() ? "" : ", ") + std::string(c);
+    if (!missing.empty()) throw InputError(path.string(), "", "has no column " + missing + "; valid: " + valid);
+    std::string row;
+    bool any = false;
+    while (std::getline(in, row))
+        if (row.find_first_not_of(" \t\r") != std::string::npos) {
+            any = true;
+            break;
+        }
+    if (!any) throw InputError(path.string(), "", "holds a header and no run; valid: " + valid);
+}
+
 bool has_plotting_modules(const std::string& python) {
     return run_tied_child({python, "-c", "import matplotlib, pandas, numpy, OpenImageIO"}, true) == 0;
 }
@@ -64,6 +98,7 @@ std::string find_plotting_python() {
 int run_report(const std::string& dir) {
     if (!fs::is_regular_file(fs::path(dir) / "results.csv"))
         throw InputError(dir, "results.csv", "not a sweep folder (no results.csv); run `caustics sweep SPEC --out DIR` first");
+    check_results_csv(dir);
     const std::string python = find_plotting_python();
     if (python.empty())
         throw InputError("report", "python3",
