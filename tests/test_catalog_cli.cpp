@@ -181,6 +181,21 @@ const std::vector<CatalogCase>& cases() {
              d.write("sweep/results.csv", "run_id,scene,method,status,time_ms_median,nrmse,radiometric\n");
              return Probe{{"report", d.file("sweep")}, {"results.csv", "a header and no run"}};
          }},
+        // sweep merge / status: the folder is named, with what a sweep folder holds.
+        {"SweepMergeEmpty", [](const CaseDir&) {
+             return Probe{{"sweep", "merge", ""}, {"sweep merge", "empty path", "valid: a sweep folder"}};
+         }},
+        {"SweepMergeOfAFile", [](const CaseDir& d) {
+             const std::string file = d.write("not_a_sweep.txt", "text");
+             return Probe{{"sweep", "merge", file}, {file, "is not a folder", "valid: a sweep folder"}};
+         }},
+        {"SweepStatusOfAFolderWithoutASweep", [](const CaseDir& d) {
+             fs::create_directories(d.path() / "empty");
+             return Probe{{"sweep", "status", d.file("empty")}, {d.file("empty"), "holds no sweep", "valid: a sweep folder"}};
+         }},
+        {"SweepStatusMissing", [](const CaseDir& d) {
+             return Probe{{"sweep", "status", d.file("missing")}, {d.file("missing"), "does not exist"}};
+         }},
         {"OutDanglingSymlink", [](const CaseDir& d) {   // was accepted: the reference was computed and cached first
              fs::create_symlink("nowhere", d.path() / "dangling");
              return Probe{reference_args(d, {"--out", d.file("dangling")}), {"--out", "dangling", "nowhere", "does not exist"}};

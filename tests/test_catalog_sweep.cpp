@@ -223,6 +223,10 @@ const std::vector<SpecCase>& spec_cases() {
              return s;
          },
          {}, {"reference.photon_cap", "100000", "200000"}},
+        {"axis_of_an_unknown_method", [](const CaseDir&) { return tiny_spec(); }, {"--axis", "nosuch.grid=[16]"},
+         {"--axis", "nosuch", "unknown method", "caustic_triangles"}},
+        {"axis_unknown_of_a_known_method", [](const CaseDir&) { return tiny_spec(); }, {"--axis", "caustic_triangles.gird=[16]"},
+         {"--axis", "unknown axis 'gird'", "grid"}},
         {"shard_empty", [](const CaseDir&) { return tiny_spec(); }, {"--shard", ""}, {"--shard", "'' is not I/N"}},
         {"spec_not_an_object", [](const CaseDir&) { return json::array({"sine"}); }, {},
          {"must be a JSON object", "scenes", "an array of 1 element"}},

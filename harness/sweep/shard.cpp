@@ -45,6 +45,17 @@ InputError merge_error(const fs::path& where, const std::string& problem) {
     return InputError(where.string(), "", problem);
 }
 
+// What `sweep merge DIR` and `sweep status DIR` are given must be a folder: named, with what it should hold.
+void check_sweep_folder(const std::string& dir_text, const std::string& command) {
+    const std::string valid = "; valid: a sweep folder, the --out of `caustics sweep` (manifest.json and results, or "
+                              "shards/0..N-1 of a sharded sweep)";
+    if (dir_text.empty()) throw InputError(command, "DIR", "empty path" + valid);
+    std::error_code ec;
+    const fs::file_status st = fs::status(dir_text, ec);
+    if (!fs::exists(st)) throw InputError(dir_text, "", "does not exist" + valid);
+    if (!fs::is_directory(st)) throw InputError(dir_text, "", "is not a folder" + valid);
+}
+
 struct Shard {
     int index = -1;
     fs::path dir;
@@ -167,6 +178,7 @@ std::vector<std::vector<std::size_t>> assign_shards(const std::vector<PlannedRun
 }
 
 MergeSummary merge_shards(const std::string& dir_text) {
+    check_sweep_folder(dir_text, "sweep merge");
     const fs::path dir(dir_text);
     const std::vector<Shard> shards = read_shards(dir);
     const json& plan = shards.front().manifest.value("plan", json());
@@ -249,6 +261,7 @@ json slurm_environment() {
 }
 
 std::string sweep_status(const std::string& dir_text) {
+    check_sweep_folder(dir_text, "sweep status");
     const fs::path dir(dir_text);
     std::ostringstream out;
     std::error_code ec;
@@ -284,7 +297,9 @@ std::string sweep_status(const std::string& dir_text) {
         }
     } else {
         const json m = read_json(dir / "manifest.json");
-        if (!m.is_object()) throw InputError(dir.string(), "", "holds no sweep (no manifest.json and no shards/ folder)");
+        if (!m.is_object())
+            throw InputError(dir.string(), "", "holds no sweep (no manifest.json and no shards/ folder); valid: a sweep "
+                                               "folder, the --out of `caustics sweep`");
         planned = m.value("runs_planned", std::size_t{0});
         const auto [d, text] = status_of(dir, planned);
         out << "sweep: " << text << "\n";

@@ -1,5 +1,6 @@
 #include <caustics/sweep/sweep_spec.hpp>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <filesystem>
@@ -334,6 +335,13 @@ SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string
         const std::string method = text.substr(0, dot), axis = text.substr(dot + 1, eq - dot - 1);
         if (!overridden.insert(method + "." + axis).second)
             throw InputError("--axis", text, method + "." + axis + " is given twice on the command line; give each axis once");
+        // The method and its axis are named by the option, not by the spec file it would be written into.
+        const MethodInfo& info = require_method(method, "--axis");
+        if (std::none_of(info.params.begin(), info.params.end(), [&](const ParamSpec& p) { return p.name == axis; })) {
+            std::string known;
+            for (const ParamSpec& p : info.params) known += (known.empty() ? "" : ", ") + p.name;
+            throw InputError("--axis", text, "unknown axis '" + axis + "' of " + method + "; its parameters: " + known);
+        }
         json values;
         try {
             values = json::parse(text.substr(eq + 1));
