@@ -206,6 +206,9 @@ TEST_F(SynthTest, RefusesMethodThatCannotSynthesise) {
                           "--size", "64", "--out", out.string()});
     EXPECT_EQ(r.code, 2) << r.out << r.err;
     EXPECT_NE(r.err.find("does not synthesise periodic textures"), std::string::npos) << r.err;
+    // The message lists the methods that can synthesise this scene.
+    EXPECT_NE(r.err.find("valid: "), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("caustic_triangles"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(out / "manifest.json"));
 }
 

@@ -1,5 +1,6 @@
 // Periodic caustic texture synthesis: see synth.hpp.
 #include <caustics/synth/synth.hpp>
+#include <caustics/api/registry.hpp>
 #include <caustics/util/build_info.hpp>
 
 #include <algorithm>
@@ -208,9 +209,17 @@ SynthPlan plan_synth(const SynthOptions& options) {
     // The method must synthesise periodic textures for this scene.
     const std::unique_ptr<Method> m = plan.method.info->create(plan.method.params);
     const Capability cap = m->texture_capability(scene);
-    if (!cap.supported)
+    if (!cap.supported) {
+        // Name the methods that can, at their defaults, on this scene.
+        std::string able;
+        for (const MethodInfo* info : registered_methods()) {
+            const std::unique_ptr<Method> other = info->create(ParamSet::resolve(info->name, info->params, {}));
+            if (other->texture_capability(scene).supported) able += (able.empty() ? "" : ", ") + info->name;
+        }
         throw InputError("--method", plan.method.info->name,
-                         "cannot synthesise a periodic texture for " + scene.name + ": " + cap.reason);
+                         "cannot synthesise a periodic texture for " + scene.name + ": " + cap.reason +
+                             "; valid: " + (able.empty() ? std::string("no registered method can for this scene") : able));
+    }
     return plan;
 }
 
