@@ -195,6 +195,25 @@ TEST_P(SweepFaults, AFailingRunIsRecordedAndTheRestRun) {
     EXPECT_FALSE(fs::exists(out / "runs" / rows[1]["run_id"].get<std::string>() / "metrics.json"));
 }
 
+// A plugin method whose constructor throws: refused with exit 2 before any work, the message naming the
+// library it came from (it said "internal failure" with what it threw alone).
+TEST(PluginFaults, ThrowingFactoryIsNamedWithItsLibrary) {
+    const caustics::test_support::ScopedTempDir d("caustics_test_plugin_create");
+    fs::create_directories(d.path());
+    const std::string plugins = "CAUSTICS_PLUGIN_PATH=" + quote(CAUSTICS_TEST_PLUGIN_DIR);
+    const fs::path out = d.path() / "out";
+    const int code = run_caustics("render sine --method sweep_fault --set fault=create --out " + quote(out.string()) +
+                                      " --cache " + quote((d.path() / "cache").string()),
+                                  d.path() / "log", plugins);
+    const std::string log = slurp(d.path() / "log");
+    EXPECT_EQ(code, 2) << log;
+    EXPECT_NE(log.find("caustics: error: "), std::string::npos) << log;
+    EXPECT_NE(log.find("sweep_fault.so"), std::string::npos) << log;
+    EXPECT_NE(log.find("creating the method failed: sweep_fault: asked to fail on create"), std::string::npos) << log;
+    EXPECT_FALSE(fs::exists(out / "metrics.json"));
+    EXPECT_FALSE(fs::exists(d.path() / "cache"));
+}
+
 INSTANTIATE_TEST_SUITE_P(Modes, SweepFaults, testing::Values(false, true),
                          [](const testing::TestParamInfo<bool>& info) { return info.param ? "Isolated" : "Worker"; });
 

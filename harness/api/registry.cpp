@@ -28,7 +28,15 @@ std::vector<std::string>& conflicts() {
 }  // namespace
 
 void add_method(MethodFactory make, const std::string& origin) {
-    auto info = std::make_unique<MethodInfo>(make());
+    std::unique_ptr<MethodInfo> info;
+    try {
+        info = std::make_unique<MethodInfo>(make());
+    } catch (const InputError&) {
+        throw;
+    } catch (const std::exception& e) {
+        // A plugin's method table that throws is the plugin's fault: named, as bad input.
+        throw InputError(origin, "", std::string("describing its method failed: ") + e.what());
+    }
     const std::string name = info->name;
     if (auto it = table().find(name); it != table().end())
         throw InputError(origin, name,

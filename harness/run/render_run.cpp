@@ -74,7 +74,15 @@ RenderRun run_method(const SceneFrame& sf, const ResolvedMethod& m, const Render
     run.metrics = metrics_skeleton(sf, m, options);
     std::vector<std::string> messages;
 
-    std::unique_ptr<Method> method = info.create(m.params);
+    std::unique_ptr<Method> method;
+    try {
+        method = info.create(m.params);
+    } catch (const InputError&) {
+        throw;
+    } catch (const std::exception& e) {
+        // Named with where it comes from (a plugin's library), before any work: refused like bad input.
+        throw InputError(method_origin(info.name), info.name, std::string("creating the method failed: ") + e.what());
+    }
     Capability cap = method->capabilities(sf.scene());
     // A scene whose medium scatters has volume caustics, and extinction along every caustic path: only
     // a method that renders the volume view (and so models the medium) is measured on it.

@@ -13,6 +13,8 @@
 
 #include <unistd.h>
 
+#include <stdexcept>
+
 #include <caustics/api/method.hpp>
 #include <caustics/api/registry.hpp>
 
@@ -23,7 +25,9 @@ using namespace caustics;
 
 class SweepFault final : public Method {
 public:
-    explicit SweepFault(std::string fault) : fault_(std::move(fault)) {}
+    explicit SweepFault(std::string fault) : fault_(std::move(fault)) {
+        if (fault_ == "create") throw std::runtime_error("sweep_fault: asked to fail on create");
+    }
 
     Capability capabilities(const Scene&) const override { return Capability::yes(); }
 
@@ -50,11 +54,12 @@ private:
 MethodInfo info() {
     MethodInfo m;
     m.name = "sweep_fault";
-    m.doc = "Fails on request (fault=segv|abort|hang|fork_segv), else renders nothing: the sweep's isolation tests";
+    m.doc = "Fails on request (fault=segv|abort|hang|fork_segv in render, create in its constructor), else renders "
+            "nothing: the sweep's isolation tests";
     m.params = {
         {"grid", ParamType::Int, "1", 1, 1, {}, "no grid (only 1 is valid)"},
         {"iterations", ParamType::Int, "1", 1, 1, {}, "nothing iterates (only 1 is valid)"},
-        {"fault", ParamType::Enum, "none", 0, 0, {"none", "segv", "abort", "hang", "fork_segv"}, "how render() fails"},
+        {"fault", ParamType::Enum, "none", 0, 0, {"none", "segv", "abort", "hang", "fork_segv", "create"}, "how it fails"},
     };
     m.create = [](const ParamSet& p) -> std::unique_ptr<Method> {
         return std::make_unique<SweepFault>(p.get_enum("fault"));
