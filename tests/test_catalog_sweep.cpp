@@ -187,13 +187,31 @@ const std::vector<SpecCase>& spec_cases() {
         {"million_runs", [](const CaseDir&) { return million_run_spec(); }, {}, {"1000000", "runs"}, 2},
         {"million_runs_with_yes", [](const CaseDir&) { return million_run_spec(); }, {"--yes"}, {"1000000", "100000"}, 2},
         {"too_many_scene_frames_with_yes",
-         [](const CaseDir&) {
+         [](const CaseDir& d) {
+             // sine.json with an animation of 100,000 frames, so that every frame exists.
+             json scene = json::parse(slurp(shipped_scene("sine")));
+             scene["animation"]["frames"] = 100000;
              json s = tiny_spec();
+             s["scenes"] = {d.write_json("long_sine.json", scene)};
              s["frames"] = json::parse(R"({"range": [0, 99999, 1]})");
              s["methods"] = json::parse(R"({"caustic_triangles": {"grid": [16, 32]}})");
              return s;
          },
          {"--yes"}, {"200000", "100000"}, 2},
+        {"frame_past_the_animation",   // was a run skipped at run time
+         [](const CaseDir&) {
+             json s = tiny_spec();
+             s["scenes"] = json::parse(R"(["sine", {"scene": "pool", "frames": [0, 120]}])");
+             return s;
+         },
+         {}, {"scenes[1].frames", "frame 120 is past the animation", "pool.json", "valid 0 to 119"}},
+        {"default_frame_past_the_animation",
+         [](const CaseDir&) {
+             json s = tiny_spec();
+             s["frames"] = {0, 1};
+             return s;
+         },
+         {}, {"'frames'", "frame 1 is past the animation", "sine.json", "valid 0 to 0"}},
         {"unknown_timing_key",
          [](const CaseDir&) {
              json s = tiny_spec();

@@ -100,14 +100,14 @@ TEST(SweepSpec, ValidSpecExpandsToCartesianProduct) {
 TEST(SweepSpec, PerSceneFramesOverrideTheDefault) {
     const TempDir d("frames");
     const SweepSpec spec = load_sweep_spec(write_file(d / "s.json", R"({
-      "scenes": ["sine", {"scene": "gaussian", "frames": {"range": [0, 4, 2]}}], "frames": [0],
+      "scenes": ["sine", {"scene": "pool", "frames": {"range": [0, 4, 2]}}], "frames": [0],
       "methods": {"caustic_triangles": {}}})").string());
     ASSERT_EQ(spec.scenes.size(), 2u);
     EXPECT_EQ(spec.scenes[0].frames, std::vector<int>{0});
     EXPECT_EQ(spec.scenes[1].frames, (std::vector<int>{0, 2, 4}));
     const auto runs = plan_runs(spec);
     ASSERT_EQ(runs.size(), 4u);   // a method with no axes runs once with its defaults
-    EXPECT_EQ(runs[3].scene_name, "gaussian");
+    EXPECT_EQ(runs[3].scene_name, "pool");
     EXPECT_EQ(runs[3].frame, 4);
     EXPECT_TRUE(runs[3].params.empty());
 }
@@ -164,8 +164,8 @@ TEST(SweepSpec, DuplicatesAreRefused) {
         {"enum", R"({"scenes": ["sine"], "methods": {"caustic_mapping": {"estimator": ["newton", "approx", "newton"]}}})",
          "value newton is given twice"},
         {"scene", R"({"scenes": ["sine", ")" + sine + R"("], "methods": {"caustic_triangles": {}}})", "scenes[1]"},
-        {"frame", R"({"scenes": ["sine"], "frames": {"range": [0, 4, 2]}, "methods": {"caustic_triangles": {}}})", ""},
-        {"scene_frame", R"({"scenes": [{"scene": "sine", "frames": [3, 3]}], "methods": {"caustic_triangles": {}}})",
+        {"frame", R"({"scenes": ["pool"], "frames": {"range": [0, 4, 2]}, "methods": {"caustic_triangles": {}}})", ""},
+        {"scene_frame", R"({"scenes": [{"scene": "pool", "frames": [3, 3]}], "methods": {"caustic_triangles": {}}})",
          "scenes[0].frames"},
     };
     for (const auto& [name, text, key] : cases) {
@@ -190,7 +190,7 @@ TEST(SweepSpec, DuplicatesAreRefused) {
 TEST(SweepSpec, RunCountAndCeiling) {
     const TempDir d("count");
     const SweepSpec spec = load_sweep_spec(write_file(d / "s.json", R"({
-      "scenes": ["sine", {"scene": "gaussian", "frames": [0, 1, 2]}],
+      "scenes": ["sine", {"scene": "pool", "frames": [0, 1, 2]}],
       "methods": {"caustic_triangles": {"grid": [16, 32]}, "caustic_mapping": {"grid": [16], "estimator": ["approx", "newton"]}}})").string());
     EXPECT_EQ(count_runs(spec), 4u * (2u + 2u));
     EXPECT_EQ(plan_runs(spec).size(), count_runs(spec));

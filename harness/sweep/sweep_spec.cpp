@@ -401,6 +401,17 @@ SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string
                                             "); run ids and reference folders are named after the scene: rename one file");
         scene_files.emplace(file_identity(scene.path), i);
         scene_names.emplace(safe_token(name), i);
+        // Every frame within the scene's animation (a frame past it was a run skipped at run time).
+        {
+            const Scene loaded = load_scene(scene.path);
+            const bool own_frames = entry.is_object() && entry.contains("frames");
+            for (int frame : scene.frames)
+                if (frame >= loaded.animation.frames)
+                    throw InputError(path, own_frames ? key + ".frames" : std::string("frames"),
+                                     "frame " + std::to_string(frame) + " is past the animation of " + scene.path + " (" +
+                                         std::to_string(loaded.animation.frames) + " frame(s): valid 0 to " +
+                                         std::to_string(loaded.animation.frames - 1) + ")");
+        }
         spec.scenes.push_back(std::move(scene));
     }
     if (root.contains("reference")) {
