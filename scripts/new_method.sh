@@ -52,7 +52,9 @@ done
 
 # --- the name ------------------------------------------------------------------------------------------
 valid="a lower-case identifier of at most 48 characters ([a-z][a-z0-9_]*, no '__'), e.g. my_method"
-[[ "$name" =~ ^[a-z][a-z0-9_]*$ ]] || fail "NAME '$name': not a lower-case identifier; valid: $valid"
+# Shown escaped (printf %q) while it is not yet known to be an identifier: a newline or a control character in
+# it would otherwise split the one-line message.
+[[ "$name" =~ ^[a-z][a-z0-9_]*$ ]] || fail "NAME $(printf '%q' "$name"): not a lower-case identifier; valid: $valid"
 [ ${#name} -le 48 ] || fail "NAME '$name': longer than 48 characters; valid: $valid"
 [[ "$name" != *__* ]] || fail "NAME '$name': '__' is reserved in C++ identifiers; valid: $valid"
 # NAME becomes a namespace inside caustics: no keyword, no namespace the code uses, no C library macro.

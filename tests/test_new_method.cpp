@@ -114,6 +114,7 @@ TEST(NewMethod, RefusesBadNamesAndWritesNothing) {
         {{"Upper"}, "not a lower-case identifier"},
         {{"1st"}, "not a lower-case identifier"},
         {{"has-dash"}, "not a lower-case identifier"},
+        {{"two\nlines"}, "$'two\\nlines'"},          // shown escaped: the message stays one line
         {{"a__b"}, "'__'"},
         {{"class"}, "keyword"},
         {{"caustic_triangles"}, "already exists"},   // a method of the repository
