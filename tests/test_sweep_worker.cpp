@@ -214,6 +214,19 @@ TEST(PluginFaults, ThrowingFactoryIsNamedWithItsLibrary) {
     EXPECT_FALSE(fs::exists(d.path() / "cache"));
 }
 
+// A file named like a plugin that is not a shared library: exit 2, the file named, and what would be valid.
+TEST(PluginFaults, NotASharedLibraryIsNamed) {
+    const caustics::test_support::ScopedTempDir d("caustics_test_plugin_not_a_library");
+    fs::create_directories(d.path() / "plugins");
+    std::ofstream(d.path() / "plugins" / "fake.so") << "not an ELF file\n";
+    const int code = run_caustics("list", d.path() / "log", "CAUSTICS_PLUGIN_PATH=" + quote((d.path() / "plugins").string()));
+    const std::string log = slurp(d.path() / "log");
+    EXPECT_EQ(code, 2) << log;
+    EXPECT_NE(log.find("caustics: error: "), std::string::npos) << log;
+    EXPECT_NE(log.find("fake.so: cannot load the library"), std::string::npos) << log;
+    EXPECT_NE(log.find("valid: a shared library built with caustics_add_method()"), std::string::npos) << log;
+}
+
 INSTANTIATE_TEST_SUITE_P(Modes, SweepFaults, testing::Values(false, true),
                          [](const testing::TestParamInfo<bool>& info) { return info.param ? "Isolated" : "Worker"; });
 

@@ -37,7 +37,9 @@ void load_plugin(const fs::path& library) {
     void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
     if (!handle) {
         const char* why = dlerror();
-        throw InputError(path, "", std::string("cannot load the library: ") + (why ? why : "unknown reason"));
+        throw InputError(path, "", std::string("cannot load the library: ") + (why ? why : "unknown reason") +
+                                       "; valid: a shared library built with caustics_add_method() against this "
+                                       "installation (CAUSTICS_PLUGIN_PATH lists such files or folders of them)");
     }
     // Never closed: the methods' code and their MethodInfo functions live in it.
     auto entry = reinterpret_cast<plugin::EntryFunction>(dlsym(handle, plugin::kEntryPoint));
