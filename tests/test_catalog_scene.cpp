@@ -21,6 +21,7 @@
 #include <nlohmann/json.hpp>
 
 #include "catalog_support.hpp"
+#include "glb_writer.hpp"
 #include <caustics/util/errors.hpp>
 #include <caustics/frame/frame.hpp>
 #include <caustics/scene/limits.hpp>
@@ -33,6 +34,7 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 using caustics::test_support::CaseDir;
+using caustics::test_support::glb_triangle;
 using caustics::test_support::check_refused;
 using caustics::test_support::slurp;
 
@@ -94,44 +96,6 @@ std::string png_claiming(std::uint32_t width, std::uint32_t height) {
     const std::string ihdr = be32(width) + be32(height) + std::string("\x08\x00\x00\x00\x00", 5);
     return kPngSignature + png_chunk("IHDR", ihdr) + png_chunk("IDAT", std::string("\x78\x01\x01\x00\x00\xff\xff", 7)) +
            png_chunk("IEND", "");
-}
-
-// Little-endian helpers for GLB.
-std::string le32(std::uint32_t v) {
-    std::string s(4, '\0');
-    std::memcpy(s.data(), &v, 4);
-    return s;
-}
-
-std::string floats(const std::vector<float>& v) {
-    std::string s(v.size() * sizeof(float), '\0');
-    std::memcpy(s.data(), v.data(), s.size());
-    return s;
-}
-
-// A minimal binary glTF: one mesh named `name` with one non-indexed triangle (POSITION and NORMAL), under the
-// node graph `nodes` (default: one node holding the mesh).
-std::string glb_triangle(const std::string& name, const std::vector<float>& positions, const std::vector<float>& normals,
-                         const json& nodes = json::array({{{"mesh", 0}}})) {
-    const std::string bin = floats(positions) + floats(normals);
-    const json gltf = {
-        {"asset", {{"version", "2.0"}}},
-        {"scene", 0},
-        {"scenes", {{{"nodes", {0}}}}},
-        {"nodes", nodes},
-        {"meshes", {{{"name", name}, {"primitives", {{{"attributes", {{"POSITION", 0}, {"NORMAL", 1}}}}}}}}},
-        {"accessors",
-         {{{"bufferView", 0}, {"componentType", 5126}, {"count", 3}, {"type", "VEC3"}},
-          {{"bufferView", 1}, {"componentType", 5126}, {"count", 3}, {"type", "VEC3"}}}},
-        {"bufferViews",
-         {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", 36}}, {{"buffer", 0}, {"byteOffset", 36}, {"byteLength", 36}}}},
-        {"buffers", {{{"byteLength", bin.size()}}}}};
-    std::string text = gltf.dump();
-    text += std::string((4 - text.size() % 4) % 4, ' ');
-    const std::string bin_padded = bin + std::string((4 - bin.size() % 4) % 4, '\0');
-    const std::uint32_t total = static_cast<std::uint32_t>(12 + 8 + text.size() + 8 + bin_padded.size());
-    return "glTF" + le32(2) + le32(total) + le32(static_cast<std::uint32_t>(text.size())) + "JSON" + text +
-           le32(static_cast<std::uint32_t>(bin_padded.size())) + std::string("BIN\0", 4) + bin_padded;
 }
 
 const float kNaN = std::numeric_limits<float>::quiet_NaN();

@@ -9,12 +9,15 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <stdexcept>
 
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/quaternion.hpp>
 #include <glm/gtc/type_ptr.hpp>
 #include <tiny_gltf.h>
+
+#include <caustics/util/json_reader.hpp>
 
 namespace caustics {
 
@@ -28,6 +31,21 @@ bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, in
 
 [[noreturn]] void bad(const std::string& path, const std::string& what) {
     throw std::runtime_error("glTF file '" + path + "': " + what);
+}
+
+// The glTF document's JSON text: the JSON chunk of a binary glTF (GLB header: magic, version, length; then
+// chunk length and type), or the whole file. Empty when the container is too short to hold one.
+std::string gltf_json_text(const std::string& path, bool binary) {
+    std::ifstream in(path, std::ios::binary);
+    if (!binary) return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    unsigned char header[20] = {};
+    if (!in.read(reinterpret_cast<char*>(header), sizeof header)) return {};
+    const std::uint32_t length = header[12] | header[13] << 8 | header[14] << 16 | static_cast<std::uint32_t>(header[15]) << 24;
+    const auto file_size = static_cast<std::uint64_t>(std::filesystem::file_size(path));
+    if (length > file_size) return {};  // tinygltf refuses the truncated chunk
+    std::string text(length, '\0');
+    in.read(text.data(), static_cast<std::streamsize>(length));
+    return text;
 }
 
 bool finite3(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
@@ -209,6 +227,11 @@ TriangleMesh load_gltf_mesh(const std::string& path, std::vector<std::string>* d
     char magic[4] = {0, 0, 0, 0};
     std::ifstream(path, std::ios::binary).read(magic, 4);
     const bool binary = std::memcmp(magic, "glTF", 4) == 0;
+    // tinygltf converts `extras` and `extensions` recursively: a document nested deeper than any glTF needs
+    // (kMaxJsonDepth, as for scene files) is refused before it parses.
+    if (json_nesting_depth(gltf_json_text(path, binary), kMaxJsonDepth) > kMaxJsonDepth)
+        bad(path, "JSON nested deeper than " + std::to_string(kMaxJsonDepth) +
+                      " arrays and objects; no valid glTF document nests that deep");
     const bool ok = binary ? loader.LoadBinaryFromFile(&model, &err, &warn, path)
                            : loader.LoadASCIIFromFile(&model, &err, &warn, path);
     if (!ok) bad(path, err.empty() ? "could not be parsed" : err);

@@ -2,6 +2,7 @@
 // Error kinds that map onto the command line's exit codes (DESIGN.md section 7):
 // InputError -> exit 2 (bad input: the message names the file, the key and what would be valid),
 // anything else -> exit 1 (internal failure).
+#include <algorithm>
 #include <stdexcept>
 #include <string>
 
@@ -18,10 +19,25 @@ public:
     const std::string& key() const { return key_; }
 
 private:
+    // A key path is built from the input's own keys, which may be arbitrarily long (a 5000-character key 200
+    // levels down): the message shows its start and end, so that the top-level key and the innermost key stay
+    // recognisable, and how long it was. (Built with append: inline, for plugins that link no harness code.)
     static std::string format(const std::string& file, const std::string& key, const std::string& problem) {
-        std::string msg = file.empty() ? std::string() : file + ": ";
-        if (!key.empty()) msg += "'" + key + "': ";
-        return msg + problem;
+        constexpr std::size_t kHead = 120, kTail = 100;
+        std::string msg;
+        msg.reserve(file.size() + std::min(key.size(), kHead + kTail + 40) + problem.size() + 8);
+        if (!file.empty()) msg.append(file).append(": ");
+        if (!key.empty()) {
+            msg.push_back('\'');
+            if (key.size() <= kHead + kTail) {
+                msg.append(key);
+            } else {
+                msg.append(key, 0, kHead).append("...(").append(std::to_string(key.size())).append(" characters)...");
+                msg.append(key, key.size() - kTail, kTail);
+            }
+            msg.append("': ");
+        }
+        return msg.append(problem);
     }
     std::string file_;
     std::string key_;

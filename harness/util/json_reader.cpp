@@ -1,5 +1,6 @@
 #include <caustics/util/json_reader.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 #include <sstream>
@@ -103,6 +104,25 @@ nlohmann::json parse_json_strict(const std::string& text, const std::string& fil
         // parse_error carries "at line L, column C"; out_of_range 406 is a number literal that overflows.
         throw InputError(file, "", std::string("not valid JSON: ") + e.what());
     }
+}
+
+std::size_t json_nesting_depth(std::string_view text, std::size_t limit) {
+    std::size_t depth = 0, deepest = 0;
+    bool in_string = false;
+    for (std::size_t i = 0; i < text.size(); ++i) {
+        const char c = text[i];
+        if (in_string) {
+            if (c == '\\') ++i;
+            else if (c == '"') in_string = false;
+            continue;
+        }
+        if (c == '"') in_string = true;
+        else if (c == '[' || c == '{') {
+            deepest = std::max(deepest, ++depth);
+            if (deepest > limit) return deepest;
+        } else if ((c == ']' || c == '}') && depth > 0) --depth;
+    }
+    return deepest;
 }
 
 std::string JsonNode::type_name() const { return describe_json(*value_); }

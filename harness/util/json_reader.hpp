@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <initializer_list>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -21,6 +22,11 @@ inline constexpr std::size_t kMaxQuotedChars = 60;
 // Parses an input file's text: InputError(file, "", ...) for invalid JSON, InputError(file, key path, ...) for
 // a key repeated inside one object (nlohmann would silently keep one) or nesting deeper than kMaxJsonDepth.
 nlohmann::json parse_json_strict(const std::string& text, const std::string& file);
+
+// The deepest nesting of arrays and objects in JSON text, counted by scanning (strings and their escapes
+// skipped, nothing parsed or built), for text handed to a parser this project does not control; stops
+// counting once past `limit`. Malformed text gives some count: the parser refuses it afterwards.
+std::size_t json_nesting_depth(std::string_view text, std::size_t limit);
 
 // A value in a message: strings (cut to kMaxQuotedChars), numbers and booleans as written, arrays and objects
 // by kind and size only (never serialised: they can be arbitrarily large or deep).
