@@ -46,6 +46,19 @@ inline nlohmann::json small_sine_scene(double size, int cells, const nlohmann::j
     return s;
 }
 
+// One run of caustic_triangles on sine with a tiny reference and one timed repeat: the smallest valid sweep.
+inline nlohmann::json small_sweep_spec() {
+    return nlohmann::json::parse(R"({
+      "description": "catalog base sweep",
+      "scenes": ["sine"],
+      "frames": [0],
+      "reference": {"photons": 20000, "noise_target": 0.5},
+      "truth": "auto",
+      "timing": {"warmup": 0, "repeats": 1, "max_time_s": 0.1},
+      "methods": {"caustic_triangles": {"grid": [16]}}
+    })");
+}
+
 // A folder of its own for one case, removed when the case ends (also when it fails: the catalog's
 // messages say what went wrong; nothing is left in /tmp).
 class CaseDir {

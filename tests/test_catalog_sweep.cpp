@@ -22,6 +22,7 @@
 namespace fs = std::filesystem;
 using nlohmann::json;
 using caustics::test_support::CaseDir;
+using caustics::test_support::small_sweep_spec;
 using caustics::test_support::check_refused;
 using caustics::test_support::ProgramResult;
 using caustics::test_support::RefusalLimits;
@@ -34,22 +35,9 @@ std::string shipped_scene(const std::string& name) {
     return (fs::path(CAUSTICS_SOURCE_DIR) / "scenes" / (name + ".json")).string();
 }
 
-// One run of caustic_triangles on sine with a tiny reference: the sweep the --resume cases continue.
-json tiny_spec() {
-    return json::parse(R"({
-      "description": "catalog base sweep",
-      "scenes": ["sine"],
-      "frames": [0],
-      "reference": {"photons": 20000, "noise_target": 0.5},
-      "truth": "auto",
-      "timing": {"warmup": 0, "repeats": 1, "max_time_s": 0.1},
-      "methods": {"caustic_triangles": {"grid": [16]}}
-    })");
-}
-
 // A million runs from two axes of a thousand values each.
 json million_run_spec() {
-    json s = tiny_spec();
+    json s = small_sweep_spec();
     s["methods"] = json::parse(R"({"caustic_mapping": {"grid": {"range": [1, 1000, 1]}, "map": {"range": [1, 1000, 1]}}})");
     return s;
 }
@@ -80,7 +68,7 @@ const BaseSweep& base_sweep() {
     static const BaseSweep base = [] {
         BaseSweep b;
         b.dir = std::make_unique<CaseDir>("sweep_base");
-        const std::string spec = b.dir->write_json("spec.json", tiny_spec());
+        const std::string spec = b.dir->write_json("spec.json", small_sweep_spec());
         double seconds = 0.0;
         const ProgramResult r = run_limited({"sweep", spec, "--out", b.dir->file("sweep"), "--cache", b.dir->cache()},
                                             b.dir->path(), RefusalLimits{300, 4L << 20}, seconds);
@@ -113,7 +101,7 @@ struct SpecCase {
 };
 
 json with_methods(const char* methods) {
-    json s = tiny_spec();
+    json s = small_sweep_spec();
     s["methods"] = json::parse(methods);
     return s;
 }
@@ -127,19 +115,19 @@ const std::vector<SpecCase>& spec_cases() {
         {"range_repeats_a_value",
          [](const CaseDir&) { return with_methods(R"({"caustic_mapping": {"d0": {"range": [1, 1.000000000000001, 1e-16]}}})"); },
          {}, {"methods.caustic_mapping.d0", "1"}},
-        {"axis_given_as_range_and_as_pow2", [](const CaseDir&) { return tiny_spec(); },
+        {"axis_given_as_range_and_as_pow2", [](const CaseDir&) { return small_sweep_spec(); },
          {"--axis", R"(caustic_triangles.grid={"range": [16, 64, 16]})", "--axis", R"(caustic_triangles.grid={"pow2": [16, 64]})"},
          {"--axis", "caustic_triangles.grid", "twice"}},
         {"scene_by_name_and_by_path",
          [](const CaseDir&) {
-             json s = tiny_spec();
+             json s = small_sweep_spec();
              s["scenes"] = {"sine", shipped_scene("sine")};
              return s;
          },
          {}, {"scenes[1]", "scenes[0]"}},
         {"scene_twice_with_other_frames",
          [](const CaseDir&) {
-             json s = tiny_spec();
+             json s = small_sweep_spec();
              s["scenes"] = json::parse(R"(["sine", {"scene": "sine", "frames": [1]}])");
              return s;
          },
@@ -147,7 +135,7 @@ const std::vector<SpecCase>& spec_cases() {
         {"scene_through_a_symlink",
          [](const CaseDir& d) {
              fs::create_symlink(shipped_scene("sine"), d.path() / "wave.json");
-             json s = tiny_spec();
+             json s = small_sweep_spec();
              s["scenes"] = {"sine", d.file("wave.json")};
              return s;
          },
@@ -156,21 +144,21 @@ const std::vector<SpecCase>& spec_cases() {
          [](const CaseDir& d) {
              fs::create_directories(d.path() / "mine");
              d.write("mine/sine.json", slurp(shipped_scene("sine")));
-             json s = tiny_spec();
+             json s = small_sweep_spec();
              s["scenes"] = {"sine", d.file("mine/sine.json")};
              return s;
          },
          {}, {"scenes[1]", "'sine'"}},
         {"repeated_default_frame",
          [](const CaseDir&) {
-             json s = tiny_spec();
+             json s = small_sweep_spec();
              s["frames"] = {0, 10, 0};
              return s;
          },
          {}, {"'frames'", "0"}},
         {"repeated_scene_frame",
          [](const CaseDir&) {
-             json s = tiny_spec();
+             json s = small_sweep_spec();
              s["scenes"] = json::parse(R"([{"scene": "pool", "frames": [30, 60, 30]}])");
              return s;
          },
@@ -191,7 +179,7 @@ const std::vector<SpecCase>& spec_cases() {
              // sine.json with an animation of 100,000 frames, so that every frame exists.
              json scene = json::parse(slurp(shipped_scene("sine")));
              scene["animation"]["frames"] = 100000;
-             json s = tiny_spec();
+             json s = small_sweep_spec();
              s["scenes"] = {d.write_json("long_sine.json", scene)};
              s["frames"] = json::parse(R"({"range": [0, 99999, 1]})");
              s["methods"] = json::parse(R"({"caustic_triangles": {"grid": [16, 32]}})");
@@ -200,52 +188,52 @@ const std::vector<SpecCase>& spec_cases() {
          {"--yes"}, {"200000", "100000"}, 2},
         {"frame_past_the_animation",   // was a run skipped at run time
          [](const CaseDir&) {
-             json s = tiny_spec();
+             json s = small_sweep_spec();
              s["scenes"] = json::parse(R"(["sine", {"scene": "pool", "frames": [0, 120]}])");
              return s;
          },
          {}, {"scenes[1].frames", "frame 120 is past the animation", "pool.json", "valid 0 to 119"}},
         {"default_frame_past_the_animation",
          [](const CaseDir&) {
-             json s = tiny_spec();
+             json s = small_sweep_spec();
              s["frames"] = {0, 1};
              return s;
          },
          {}, {"'frames'", "frame 1 is past the animation", "sine.json", "valid 0 to 0"}},
         {"unknown_timing_key",
          [](const CaseDir&) {
-             json s = tiny_spec();
+             json s = small_sweep_spec();
              s["timing"]["repeat"] = 3;
              return s;
          },
          {}, {"timing.repeat", "valid keys"}},
         {"unknown_key_nested_in_report",
          [](const CaseDir&) {
-             json s = tiny_spec();
+             json s = small_sweep_spec();
              s["report"] = {{"time_budget_ms", 16.7}, {"error_targets", 0.1}};
              return s;
          },
          {}, {"report.error_targets", "valid keys", "error_target"}},
         {"report_paper_settings_not_an_object",
          [](const CaseDir&) {
-             json s = tiny_spec();
+             json s = small_sweep_spec();
              s["report"] = {{"paper_settings", {{"caustic_triangles", 256}}}};
              return s;
          },
          {}, {"report.paper_settings.caustic_triangles", "must be an object"}},
         {"photon_cap_below_photons",
          [](const CaseDir&) {
-             json s = tiny_spec();
+             json s = small_sweep_spec();
              s["reference"]["photons"] = 200000;
              s["reference"]["photon_cap"] = 100000;
              return s;
          },
          {}, {"reference.photon_cap", "100000", "200000"}},
-        {"axis_of_an_unknown_method", [](const CaseDir&) { return tiny_spec(); }, {"--axis", "nosuch.grid=[16]"},
+        {"axis_of_an_unknown_method", [](const CaseDir&) { return small_sweep_spec(); }, {"--axis", "nosuch.grid=[16]"},
          {"--axis", "nosuch", "unknown method", "caustic_triangles"}},
-        {"axis_unknown_of_a_known_method", [](const CaseDir&) { return tiny_spec(); }, {"--axis", "caustic_triangles.gird=[16]"},
+        {"axis_unknown_of_a_known_method", [](const CaseDir&) { return small_sweep_spec(); }, {"--axis", "caustic_triangles.gird=[16]"},
          {"--axis", "unknown axis 'gird'", "grid"}},
-        {"shard_empty", [](const CaseDir&) { return tiny_spec(); }, {"--shard", ""}, {"--shard", "'' is not I/N"}},
+        {"shard_empty", [](const CaseDir&) { return small_sweep_spec(); }, {"--shard", ""}, {"--shard", "'' is not I/N"}},
         {"spec_not_an_object", [](const CaseDir&) { return json::array({"sine"}); }, {},
          {"must be a JSON object", "scenes", "an array of 1 element"}},
     };
@@ -284,14 +272,14 @@ const std::vector<ResumeCase>& resume_cases() {
     static const std::vector<ResumeCase> cases = {
         {"changed_noise_target",
          [](const CaseDir&) {
-             json s = tiny_spec();
+             json s = small_sweep_spec();
              s["reference"]["noise_target"] = 0.25;
              return s;
          },
          {}, {"noise_target", "0.5 in the folder", "0.25 now"}},
         {"changed_photons",
          [](const CaseDir&) {
-             json s = tiny_spec();
+             json s = small_sweep_spec();
              s["reference"]["photons"] = 40000;
              return s;
          },
@@ -299,26 +287,26 @@ const std::vector<ResumeCase>& resume_cases() {
         {"changed_axis",
          [](const CaseDir&) { return with_methods(R"({"caustic_triangles": {"grid": [16, 24]}})"); },
          {}, {"methods.caustic_triangles.grid"}},
-        {"axis_override_on_resume", [](const CaseDir&) { return tiny_spec(); }, {"--axis", "caustic_triangles.grid=[24]"},
+        {"axis_override_on_resume", [](const CaseDir&) { return small_sweep_spec(); }, {"--axis", "caustic_triangles.grid=[24]"},
          {"methods.caustic_triangles.grid"}},
         {"changed_repeats",
          [](const CaseDir&) {
-             json s = tiny_spec();
+             json s = small_sweep_spec();
              s["timing"]["repeats"] = 2;
              return s;
          },
          {}, {"timing.repeats", "1 in the folder", "2 now"}},
-        {"changed_timeout_option", [](const CaseDir&) { return tiny_spec(); }, {"--timeout", "7"}, {"timing.timeout_s"}},
+        {"changed_timeout_option", [](const CaseDir&) { return small_sweep_spec(); }, {"--timeout", "7"}, {"timing.timeout_s"}},
         {"changed_truth",
          [](const CaseDir&) {
-             json s = tiny_spec();
+             json s = small_sweep_spec();
              s["truth"] = "reference";
              return s;
          },
          {}, {"truth", "auto", "reference"}},
         {"changed_frames",
          [](const CaseDir&) {
-             json s = tiny_spec();
+             json s = small_sweep_spec();
              s["frames"] = {0, 1};
              return s;
          },
@@ -327,16 +315,16 @@ const std::vector<ResumeCase>& resume_cases() {
          [](const CaseDir& d) {
              fs::create_directories(d.path() / "scenes");
              d.write("scenes/sine.json", slurp(shipped_scene("sine")) + "\n");
-             json s = tiny_spec();
+             json s = small_sweep_spec();
              s["scenes"] = {d.file("scenes/sine.json")};
              return s;
          },
          {}, {"scenes.sine"}},
-        {"folder_without_manifest", [](const CaseDir&) { return tiny_spec(); }, {}, {"manifest.json"},
+        {"folder_without_manifest", [](const CaseDir&) { return small_sweep_spec(); }, {}, {"manifest.json"},
          [](const fs::path& sweep) { fs::remove(sweep / "manifest.json"); }},
         {"older_manifest_with_another_spec",   // a folder from before plans were recorded: its spec is compared
          [](const CaseDir&) {
-             json s = tiny_spec();
+             json s = small_sweep_spec();
              s["reference"]["seed"] = 7;
              return s;
          },
@@ -378,7 +366,7 @@ TEST(SweepResume, SamePlanIsAccepted) {
     CaseDir dir("same_plan");
     const fs::path sweep = copy_base(dir);
     const std::string rows = slurp(sweep / "results.jsonl");
-    json s = tiny_spec();
+    json s = small_sweep_spec();
     s["description"] = "another description";
     s["report"] = {{"time_budget_ms", 33.3}};
     const std::string spec = dir.write_json("renamed.json", s);
@@ -397,7 +385,7 @@ TEST(SweepResume, SamePlanIsAccepted) {
     manifest.erase("plan");
     manifest.erase("plan_hash");
     std::ofstream(sweep / "manifest.json", std::ios::binary) << manifest.dump(2) << "\n";
-    const std::string original = dir.write_json("original.json", tiny_spec());
+    const std::string original = dir.write_json("original.json", small_sweep_spec());
     args = sweep_args(dir, original, sweep.string());
     args.push_back("--resume");
     const ProgramResult again = run_limited(args, dir.path(), RefusalLimits{120, 4L << 20}, seconds);

@@ -203,17 +203,11 @@ json base_scene() {
     return s;
 }
 
+// A valid spec with a report block, so that generated values reach every level the loader checks.
 json base_spec() {
-    return json::parse(R"({
-      "description": "structural fuzz base sweep",
-      "scenes": ["sine"],
-      "frames": [0],
-      "reference": {"photons": 20000, "noise_target": 0.5},
-      "truth": "auto",
-      "timing": {"warmup": 0, "repeats": 1, "max_time_s": 0.1},
-      "methods": {"caustic_triangles": {"grid": [16]}},
-      "report": {"figures": true}
-    })");
+    json s = caustics::test_support::small_sweep_spec();
+    s["report"] = {{"time_budget_ms", 100}, {"image_settings", {{"caustic_triangles", {{"grid", 16}}}}}};
+    return s;
 }
 
 // Runs `count` drawn cases of a generated value placed anywhere in `base`, loaded by `load(path)`.

@@ -9,8 +9,9 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
-#include <iterator>
 #include <stdexcept>
+#include <string_view>
+#include <vector>
 
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/quaternion.hpp>
@@ -33,19 +34,16 @@ bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, in
     throw std::runtime_error("glTF file '" + path + "': " + what);
 }
 
-// The glTF document's JSON text: the JSON chunk of a binary glTF (GLB header: magic, version, length; then
-// chunk length and type), or the whole file. Empty when the container is too short to hold one.
-std::string gltf_json_text(const std::string& path, bool binary) {
-    std::ifstream in(path, std::ios::binary);
-    if (!binary) return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-    unsigned char header[20] = {};
-    if (!in.read(reinterpret_cast<char*>(header), sizeof header)) return {};
-    const std::uint32_t length = header[12] | header[13] << 8 | header[14] << 16 | static_cast<std::uint32_t>(header[15]) << 24;
-    const auto file_size = static_cast<std::uint64_t>(std::filesystem::file_size(path));
-    if (length > file_size) return {};  // tinygltf refuses the truncated chunk
-    std::string text(length, '\0');
-    in.read(text.data(), static_cast<std::streamsize>(length));
-    return text;
+// The glTF document's JSON text inside the file's bytes: the JSON chunk of a binary glTF (GLB header: magic,
+// version, length; then the chunk's length and type), or the whole file. Empty when the container is too
+// short to hold the chunk it announces (tinygltf refuses it).
+std::string_view gltf_json_text(const std::vector<unsigned char>& bytes, bool binary) {
+    const std::string_view all(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+    if (!binary) return all;
+    if (bytes.size() < 20) return {};
+    const std::uint32_t length = bytes[12] | bytes[13] << 8 | bytes[14] << 16 | static_cast<std::uint32_t>(bytes[15]) << 24;
+    if (length > bytes.size() - 20) return {};
+    return all.substr(20, length);
 }
 
 bool finite3(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
@@ -223,17 +221,28 @@ TriangleMesh load_gltf_mesh(const std::string& path, std::vector<std::string>* d
     tinygltf::TinyGLTF loader;
     loader.SetImageLoader(skip_image, nullptr);
     std::string err, warn;
+    // The file is read once: checked here, then parsed from memory (what tinygltf's *FromFile calls do after
+    // reading it, with the file's folder as the base for external buffers).
+    std::error_code size_error;
+    const std::uintmax_t file_size = std::filesystem::file_size(path, size_error);
+    if (size_error) bad(path, "could not be read: " + size_error.message());
+    if (file_size == 0) bad(path, "Empty file.");
+    std::vector<unsigned char> bytes(file_size);
+    std::ifstream in(path, std::ios::binary);
+    if (!in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size())))
+        bad(path, "could not be read");
     // Binary glTF starts with the magic "glTF"; anything else is read as JSON glTF.
-    char magic[4] = {0, 0, 0, 0};
-    std::ifstream(path, std::ios::binary).read(magic, 4);
-    const bool binary = std::memcmp(magic, "glTF", 4) == 0;
+    const bool binary = bytes.size() >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0;
     // tinygltf converts `extras` and `extensions` recursively: a document nested deeper than any glTF needs
     // (kMaxJsonDepth, as for scene files) is refused before it parses.
-    if (json_nesting_depth(gltf_json_text(path, binary), kMaxJsonDepth) > kMaxJsonDepth)
+    if (json_nesting_depth(gltf_json_text(bytes, binary), kMaxJsonDepth) > kMaxJsonDepth)
         bad(path, "JSON nested deeper than " + std::to_string(kMaxJsonDepth) +
                       " arrays and objects; no valid glTF document nests that deep");
-    const bool ok = binary ? loader.LoadBinaryFromFile(&model, &err, &warn, path)
-                           : loader.LoadASCIIFromFile(&model, &err, &warn, path);
+    const std::string base_dir = std::filesystem::path(path).parent_path().string();
+    const auto size = static_cast<unsigned int>(bytes.size());
+    const bool ok = binary ? loader.LoadBinaryFromMemory(&model, &err, &warn, bytes.data(), size, base_dir)
+                           : loader.LoadASCIIFromString(&model, &err, &warn, reinterpret_cast<const char*>(bytes.data()),
+                                                        size, base_dir);
     if (!ok) bad(path, err.empty() ? "could not be parsed" : err);
 
     if (dependencies) {

@@ -21,7 +21,7 @@ public:
 private:
     // A key path is built from the input's own keys, which may be arbitrarily long (a 5000-character key 200
     // levels down): the message shows its start and end, so that the top-level key and the innermost key stay
-    // recognisable, and how long it was. (Built with append: inline, for plugins that link no harness code.)
+    // recognisable, and how long it was. (Inline, for plugins that link no harness code.)
     static std::string format(const std::string& file, const std::string& key, const std::string& problem) {
         constexpr std::size_t kHead = 120, kTail = 100;
         std::string msg;
@@ -37,7 +37,14 @@ private:
             }
             msg.append("': ");
         }
-        return msg.append(problem);
+        msg.append(problem);
+        // Any message stays short enough to read whatever the input quoted into it (a megabyte scene name, a
+        // long object name in a list of valid ones): an overlong one keeps its start (file, key) and its end
+        // (what would be valid) and says how long it was.
+        constexpr std::size_t kMessageHead = 1300, kMessageTail = 600;
+        if (msg.size() <= kMessageHead + kMessageTail) return msg;
+        return msg.substr(0, kMessageHead) + "...(" + std::to_string(msg.size()) + " characters)..." +
+               msg.substr(msg.size() - kMessageTail);
     }
     std::string file_;
     std::string key_;
