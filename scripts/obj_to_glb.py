@@ -10,8 +10,9 @@ Optional placement (baked into the vertices):
   --height H        uniform scale so the mesh is H metres tall (along z after the rotation)
   --center          centre the mesh in x and y and put its lowest point on z = 0
 
-Used once to make scenes/assets/bunny.glb:
-  /usr/bin/python3 scripts/obj_to_glb.py ../shared/assets/stanford-bunny.obj scenes/assets/bunny.glb \
+Used once to make scenes/assets/bunny.glb from the Stanford Bunny's `bun_zipper` scan as OBJ (Stanford 3D
+Scanning Repository), saved as stanford-bunny.obj:
+  /usr/bin/python3 scripts/obj_to_glb.py stanford-bunny.obj scenes/assets/bunny.glb \
       --y-up-to-z-up --height 0.6 --center
 Needs numpy (Debian: python3-numpy, under /usr/bin/python3).
 """

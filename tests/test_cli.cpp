@@ -1,4 +1,4 @@
-// The `caustics` program end to end (DESIGN.md section 7): malformed inputs give exit code 2, one
+// The `caustics` program end to end (docs/design.md section 7): malformed inputs give exit code 2, one
 // "caustics: error:" line naming the file or key, and no output files; a small render writes every file
 // and metrics.json key; `list --json` documents every parameter.
 #include <sys/wait.h>
@@ -199,7 +199,7 @@ TEST_F(CliTest, RenderWritesFilesAndKeys) {
     for (const char* f : {"receiver.exr", "camera.exr", "beauty.png", "metrics.json"})
         EXPECT_TRUE(fs::is_regular_file(fs::path(out_dir()) / f)) << f;
     const json m = json::parse(slurp(fs::path(out_dir()) / "metrics.json"));
-    // DESIGN.md section 7, plus build_type, warmup, repeats, below_reference_noise, message, and issue 11's
+    // docs/design.md section 7, plus build_type, warmup, repeats, below_reference_noise, message, and issue 11's
     // frame time, dispersion, truth and baseline.
     for (const char* k : {"method", "scene", "frame", "params", "radiometric", "time_ms", "fps", "prepare_ms",
                           "update_ms", "stages_ms", "threads", "error", "reference", "health", "status",

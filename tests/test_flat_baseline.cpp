@@ -1,4 +1,4 @@
-// The no-caustic baseline (harness/baseline, DESIGN.md section 6): what a flat interface would transmit
+// The no-caustic baseline (harness/baseline, docs/design.md section 6): what a flat interface would transmit
 // equals the exact flat truth and the Monte Carlo reference of flat water, leaves the strip of width
 // depth tan(theta_t) unlit on the side the refracted light moves away from, and exists only for
 // directional light through one height-field interface (plane or height-field receivers).

@@ -1,4 +1,4 @@
-// compare_images against hand-computed values (harness/run/metrics.hpp, DESIGN.md section 6).
+// compare_images against hand-computed values (harness/run/metrics.hpp, docs/design.md section 6).
 #include <cmath>
 #include <limits>
 #include <vector>

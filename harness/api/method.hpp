@@ -1,7 +1,7 @@
 #pragma once
-// The plugin interface every caustics method implements (DESIGN.md section 4).
+// The plugin interface every caustics method implements (docs/design.md section 4).
 //
-// Life cycle, as the harness drives it (DESIGN.md section 6):
+// Life cycle, as the harness drives it (docs/design.md section 6):
 //   auto m = info.create(params);           // parameters already validated against info.params
 //   m->capabilities(scene)                  // supported, or a human-readable reason
 //   m->prepare(scene)                       // once per scene: timed, reported as prepare_ms
@@ -123,7 +123,7 @@ struct CausticOutput {
     Image camera;         // gbuffer width x height, 1 channel; only covered pixels are read
     Image texture;        // TextureRequest width x height, 1 channel, E_c [W/m^2] (see TextureRequest)
     Image texture_rgb;    // optional colour version of the texture (dispersion), 3 channels
-    // Volume caustic radiance L_v [W/(m^2 sr)] (DESIGN.md section 3), camera G-buffer width x height, 1
+    // Volume caustic radiance L_v [W/(m^2 sr)] (docs/design.md section 3), camera G-buffer width x height, 1
     // channel: per pixel, the radiance scattered once towards the camera, along the primary ray from
     // kVolumeNearDistance (frame/camera.hpp, 5 cm) off the pinhole to its first hit (to infinity on a
     // miss) and inside the camera's own medium

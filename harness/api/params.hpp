@@ -1,5 +1,5 @@
 #pragma once
-// Typed method parameters (DESIGN.md section 4). Each method declares a table of ParamSpec; values are
+// Typed method parameters (docs/design.md section 4). Each method declares a table of ParamSpec; values are
 // read only through ParamSet, which rejects unknown keys and out-of-range values with an InputError
 // naming the key and what would be valid.
 #include <limits>

@@ -1,4 +1,4 @@
-// The `caustics` program (DESIGN.md section 7). Subcommands register themselves (command.hpp).
+// The `caustics` program (docs/design.md section 7). Subcommands register themselves (command.hpp).
 // Exit codes: 0 success, 2 bad input or usage, 1 internal failure. Every error is one line on stderr,
 //   caustics: error: <option or file>: <what is wrong>; valid: <what would be valid>
 // (options.hpp checks option values; usage_errors.hpp words CLI11's own usage errors; InputError

@@ -1,4 +1,4 @@
-// The no-caustic baseline: what a flat interface would transmit (DESIGN.md section 6). See baseline.hpp.
+// The no-caustic baseline: what a flat interface would transmit (docs/design.md section 6). See baseline.hpp.
 #include <caustics/frame/baseline.hpp>
 
 #include <algorithm>

@@ -1,5 +1,5 @@
 #pragma once
-// The no-caustic baseline (DESIGN.md section 6): what a flat interface would transmit, and the pieces of
+// The no-caustic baseline (docs/design.md section 6): what a flat interface would transmit, and the pieces of
 // flat-interface optics that the volume methods' flux normalization (volume_lookup.cpp) shares with it.
 #include <glm/glm.hpp>
 

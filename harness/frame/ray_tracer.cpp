@@ -1,4 +1,4 @@
-// Embree 3 ray tracer of one frame (DESIGN.md section 10: Embree 3.13, rtcIntersect1 with an
+// Embree 3 ray tracer of one frame (docs/design.md section 10: Embree 3.13, rtcIntersect1 with an
 // RTCIntersectContext). Batches go to Embree in the caller's QueryMode: single rays, or 8- or 16-ray
 // packets with a coherent context; every mode completes its hits in the same code, so all give the
 // same bits.

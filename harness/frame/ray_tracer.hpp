@@ -1,5 +1,5 @@
 #pragma once
-// Embree 3 scene of one frame (DESIGN.md section 10: rtcIntersect1 with an RTCIntersectContext).
+// Embree 3 scene of one frame (docs/design.md section 10: rtcIntersect1 with an RTCIntersectContext).
 // Triangles for planes, boxes, meshes and height fields; Embree sphere points for analytic spheres.
 // Shading normals are interpolated (height fields: from the field's gradients) and face the same
 // side as the geometric normal's outward orientation.

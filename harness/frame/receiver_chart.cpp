@@ -1,4 +1,4 @@
-// The measurement receiver's chart (DESIGN.md section 3).
+// The measurement receiver's chart (docs/design.md section 3).
 #include <caustics/frame/receiver_chart.hpp>
 
 #include <algorithm>

@@ -1,5 +1,5 @@
 #pragma once
-// The measurement receiver's chart (DESIGN.md section 3): bin (i, j) of a width x height map covers
+// The measurement receiver's chart (docs/design.md section 3): bin (i, j) of a width x height map covers
 // s in [i, i+1) / width, t in [j, j+1) / height of the receiver's parameter square.
 //   plane:       p(s, t) = center + (s - 1/2) u + (t - 1/2) v
 //   heightfield: p(s, t) = (x0 + s X, y0 + t Y, h(x, y)) over the field's rectangle

@@ -1,4 +1,4 @@
-// Analytic truth of the refracting sine surface (DESIGN.md section 5). See analytic_truth.hpp.
+// Analytic truth of the refracting sine surface (docs/design.md section 5). See analytic_truth.hpp.
 //
 // Transport conventions are the reference's (reference.cpp): air (index 1) above the height field, water
 // below, refraction by Snell's law with the exact surface normal, Beer-Lambert absorption exp(-Ka L) over

@@ -1,5 +1,5 @@
 #pragma once
-// Analytic ground truth (DESIGN.md section 5): where a scene has an exact closed form, its receiver map
+// Analytic ground truth (docs/design.md section 5): where a scene has an exact closed form, its receiver map
 // serves as the ground truth and the Monte Carlo reference is tested against it (tests/test_analytic_truth.cpp).
 //
 // Three closed forms: the ball lens (BallLens below) and the Gaussian bump before its first focus

@@ -6,7 +6,7 @@
 // which a histogram of fine source annuli handles exactly as the sine's strip histogram does: the annulus
 // [h_a, h_b] carries E0 pi (h_b^2 - h_a^2) times the interfaces' transmittance and the chord's absorption,
 // spread uniformly over the radii between |R(h_a)| and |R(h_b)|. Light that misses the ball reaches the
-// floor directly and is not caustic irradiance (DESIGN.md section 3). Each receiver bin averages the radial
+// floor directly and is not caustic irradiance (docs/design.md section 3). Each receiver bin averages the radial
 // irradiance at 16 x 16 sub-points.
 #include <algorithm>
 #include <cmath>

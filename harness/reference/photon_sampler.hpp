@@ -1,5 +1,5 @@
 #pragma once
-// The reference's sample values (DESIGN.md section 5, issue 11): for photon `index` of replica `replica`,
+// The reference's sample values (docs/design.md section 5, issue 11): for photon `index` of replica `replica`,
 // the value in [0, 1) of each sample dimension (0-1: emission position or direction, 2: dispersion,
 // 3 and up: the Fresnel choice of each specular event).
 //

@@ -1,5 +1,5 @@
 #pragma once
-// Where the reference's photons come from (DESIGN.md section 5): the emitters of directional and point
+// Where the reference's photons come from (docs/design.md section 5): the emitters of directional and point
 // lights, and the order in which each batch of photons is traced (the sample values themselves come
 // from photon_sampler.hpp). Split from reference.cpp; everything here is deterministic.
 #include <cstddef>

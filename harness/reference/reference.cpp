@@ -1,4 +1,4 @@
-// The reference light tracer (DESIGN.md section 5). See reference.hpp for the contract.
+// The reference light tracer (docs/design.md section 5). See reference.hpp for the contract.
 //
 // Determinism: photon (replica r, index i) draws its sample values only from PhotonSampler(seed, r, i);
 // deposits are summed as 64-bit fixed-point integers (associative), photons are traced in a fixed order

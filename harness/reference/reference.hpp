@@ -1,5 +1,5 @@
 #pragma once
-// The ground truth (DESIGN.md section 5): an Embree light tracer of caustic irradiance E_c.
+// The ground truth (docs/design.md section 5): an Embree light tracer of caustic irradiance E_c.
 //
 // Photons leave the light (directional: uniformly over a rectangle perpendicular to the light that
 // covers the specular objects' footprint; point: uniformly in the cone around the specular objects),

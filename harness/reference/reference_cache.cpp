@@ -1,4 +1,4 @@
-// The on-disk reference cache (DESIGN.md section 5).
+// The on-disk reference cache (docs/design.md section 5).
 //
 // Key: a 128-bit hash of everything the reference depends on (scene bytes, every asset's bytes, frame,
 // photons, seed, camera view, receiver and camera sizes, kReferenceVersion).

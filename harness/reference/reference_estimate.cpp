@@ -1,4 +1,4 @@
-// The reference's estimates from its integer sums (DESIGN.md section 5; the noise model is in
+// The reference's estimates from its integer sums (docs/design.md section 5; the noise model is in
 // reference.cpp's file comment): per view, the mean over the replicas, its standard error and each
 // replica's own image, and the flux ledger in watts.
 #include <algorithm>

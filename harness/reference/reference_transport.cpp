@@ -1,4 +1,4 @@
-// One photon's path through the scene (DESIGN.md section 5): emission, specular refraction and
+// One photon's path through the scene (docs/design.md section 5): emission, specular refraction and
 // reflection (Fresnel by Russian roulette where the scene asks), extinction in media, the camera_volume
 // scattering points (reference_volume.cpp) and the deposit on the first diffuse object after at least
 // one specular event. See reference.cpp for the determinism and noise contract.

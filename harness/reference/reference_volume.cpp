@@ -1,4 +1,4 @@
-// Media in the reference (DESIGN.md section 3, issue 15): the per-segment media and the camera_volume
+// Media in the reference (docs/design.md section 3, issue 15): the per-segment media and the camera_volume
 // view, the volume caustic radiance L_v (method.hpp, CausticOutput::camera_volume) estimated by
 // connecting one scattering point per photon segment to the pinhole (a light tracer's next-event
 // estimate towards the camera, as in Veach's thesis, section 10.2, and pbrt-v4's camera importance).

@@ -1,6 +1,6 @@
 #pragma once
 // `caustics report DIR`: checks the sweep folder and runs the plotting scripts (scripts/report/report.py)
-// with an interpreter that has Debian's matplotlib, pandas and numpy (DESIGN.md section 10). The script
+// with an interpreter that has Debian's matplotlib, pandas and numpy (docs/design.md section 10). The script
 // runs as a child that dies with this process (a killed report leaves nothing running), and writes
 // report.md, every figure and every table under a temporary name renamed into place (no half file).
 #include <string>

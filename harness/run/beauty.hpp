@@ -1,7 +1,7 @@
 #pragma once
 // The beauty image for figures (not part of any error): camera rays through the RayTracer; at diffuse
 // hits, albedo / pi * (direct irradiance from every light, with shadow rays, + caustic irradiance E_c).
-// Specular objects cast shadows, since their light arrives as caustics (DESIGN.md section 3). E_c at
+// Specular objects cast shadows, since their light arrives as caustics (docs/design.md section 3). E_c at
 // primary diffuse hits comes from the method's camera view; at diffuse hits reached through specular
 // surfaces, from the method's receiver map when the hit is on the measurement receiver (elsewhere 0).
 // Mirrors reflect; dielectrics refract (Fresnel-weighted reflection + refraction when scene.fresnel,

@@ -1,5 +1,5 @@
 #pragma once
-// Error metrics against the reference (DESIGN.md section 6).
+// Error metrics against the reference (docs/design.md section 6).
 //   nrmse  = sqrt(mean((m - r)^2)) / mean(r)
 //   relmse = mean((m - r)^2 / (r^2 + eps)),  eps = (0.01 mean(r))^2
 //   psnr   = 10 log10(max(r)^2 / mean((m - r)^2))

@@ -35,7 +35,7 @@ json claim_json(const AccuracyClaim& claim) {
             {"met", nullptr}};
 }
 
-// The metrics.json skeleton: every key of DESIGN.md section 7, values null until measured.
+// The metrics.json skeleton: every key of docs/design.md section 7, values null until measured.
 json metrics_skeleton(const SceneFrame& sf, const ResolvedMethod& m, const RenderOptions& options) {
     json j;
     j["method"] = m.info->name;

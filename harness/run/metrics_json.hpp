@@ -1,5 +1,5 @@
 #pragma once
-// The metrics.json document of one run (DESIGN.md section 7): its skeleton and JSON helpers.
+// The metrics.json document of one run (docs/design.md section 7): its skeleton and JSON helpers.
 #include <nlohmann/json.hpp>
 
 #include <caustics/api/method.hpp>
@@ -21,7 +21,7 @@ nlohmann::json timing_json(const TimingSummary* t);
 // with this frame's values and limits) and met (null until judged against an exact truth).
 nlohmann::json claim_json(const AccuracyClaim& claim);
 
-// The metrics.json skeleton: every key of DESIGN.md section 7, values null until measured.
+// The metrics.json skeleton: every key of docs/design.md section 7, values null until measured.
 nlohmann::json metrics_skeleton(const SceneFrame& sf, const ResolvedMethod& m, const RenderOptions& options);
 
 }  // namespace caustics

@@ -1,5 +1,5 @@
 #pragma once
-// Errors net of the reference's own noise (DESIGN.md section 6, issue 11).
+// Errors net of the reference's own noise (docs/design.md section 6, issue 11).
 //
 // A Monte Carlo reference r = t + noise makes mean((m - r)^2) overestimate the method's true error
 // mean((m - t)^2) by the reference's variance. With R independent replicas r_k the products

@@ -1,4 +1,4 @@
-// The files of one render (DESIGN.md section 7), each written atomically, metrics.json last.
+// The files of one render (docs/design.md section 7), each written atomically, metrics.json last.
 #include <filesystem>
 
 #include <caustics/run/beauty.hpp>

@@ -102,7 +102,7 @@ RenderRun run_method(const SceneFrame& sf, const ResolvedMethod& m, const Render
     }
 
     // Timed regions: prepare, update, each repeat of render (and of update where the scene is animated).
-    // Nothing else (DESIGN.md section 6).
+    // Nothing else (docs/design.md section 6).
     Stopwatch clock;
     method->prepare(sf.scene());
     const double prepare_ms = clock.ms();

@@ -1,5 +1,5 @@
 #pragma once
-// The pipeline behind `caustics render` (DESIGN.md sections 6 and 7), reusable by the sweep runner:
+// The pipeline behind `caustics render` (docs/design.md sections 6 and 7), reusable by the sweep runner:
 // load scene -> resolve method and parameters (every InputError before any output is written) ->
 // frame geometry, RayTracer, ReceiverChart, camera G-buffer -> capabilities -> create, prepare (timed),
 // update (timed), warm-up renders, timed repeats -> reference (cached; never inside a timed region) ->
@@ -34,7 +34,7 @@ namespace caustics {
 struct RenderRun {
     std::string status;            // "ok", "skipped" (unsupported scene), "unstable" (non-finite output)
     std::string message;
-    nlohmann::json metrics;        // the metrics.json document (DESIGN.md section 7)
+    nlohmann::json metrics;        // the metrics.json document (docs/design.md section 7)
     CausticOutput output;          // the last timed render's output
     bool have_reference = false;   // error values were measured against a reference
 };

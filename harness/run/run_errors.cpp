@@ -64,7 +64,7 @@ ViewErrors measure_view(const Image& method, const TruthMaps& truth, const std::
     j["relmse_net"] = number(std::max(0.0, net_relmse(method, truth, mask)));
     double scale = 1.0;
     NetError ranked = net;
-    if (fit) {   // a radiometric method is never fitted (DESIGN.md section 3)
+    if (fit) {   // a radiometric method is never fitted (docs/design.md section 3)
         j["nrmse_fit"] = number(e.nrmse_fit);
         j["fit_scale"] = number(e.fit_scale);
         scale = e.fit_scale;

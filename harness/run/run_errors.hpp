@@ -1,5 +1,5 @@
 #pragma once
-// The error block of one run's metrics.json (DESIGN.md section 6, issue 11): plain metrics against the
+// The error block of one run's metrics.json (docs/design.md section 6, issue 11): plain metrics against the
 // truth, the same net of the reference's noise with 95 % intervals, the per-bin consistency test, and
 // the comparison with the no-caustic baseline.
 #include <cstdint>

@@ -1,5 +1,5 @@
 // glTF/GLB -> TriangleMesh with tinygltf (Debian ships it as a shared library: no
-// TINYGLTF_IMPLEMENTATION here, DESIGN.md section 10).
+// TINYGLTF_IMPLEMENTATION here, docs/design.md section 10).
 #include <caustics/scene/gltf_mesh.hpp>
 
 #include <cmath>

@@ -1,5 +1,5 @@
 #pragma once
-// The scene model (DESIGN.md section 8). Coordinates are right-handed with +z up: height fields are
+// The scene model (docs/design.md section 8). Coordinates are right-handed with +z up: height fields are
 // z = h(x, y) and water lies below its surface. Lengths are in metres.
 #include <cmath>
 #include <cstdint>
@@ -161,7 +161,7 @@ inline MediumCoefficients medium_at(const Scene& scene, int object) {
 }
 
 // Whether some medium of the scene scatters: then its caustics include volume caustic radiance
-// (camera_volume, DESIGN.md section 3) and every caustic path is attenuated by extinction.
+// (camera_volume, docs/design.md section 3) and every caustic path is attenuated by extinction.
 inline bool scene_scatters(const Scene& scene) {
     if (scene.medium.present && scene.medium.scattering > 0.0) return true;
     for (const Object& o : scene.objects)

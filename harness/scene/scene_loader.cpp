@@ -1,4 +1,4 @@
-// load_scene: the JSON scene format of DESIGN.md section 8 (the format is fixed in
+// load_scene: the JSON scene format of docs/design.md section 8 (the format is fixed in
 // scenes/README.md). Every field is validated; any problem is an InputError naming the file, the
 // key path ("objects[2].material.ior") and what would be valid.
 //

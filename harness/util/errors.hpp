@@ -1,5 +1,5 @@
 #pragma once
-// Error kinds that map onto the command line's exit codes (DESIGN.md section 7):
+// Error kinds that map onto the command line's exit codes (docs/design.md section 7):
 // InputError -> exit 2 (bad input: the message names the file, the key and what would be valid),
 // anything else -> exit 1 (internal failure).
 #include <algorithm>

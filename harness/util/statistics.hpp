@@ -1,5 +1,5 @@
 #pragma once
-// Small statistics the measurement protocol needs (DESIGN.md section 6): Student-t tail probabilities
+// Small statistics the measurement protocol needs (docs/design.md section 6): Student-t tail probabilities
 // and quantiles (standard errors from R replicas have R - 1 degrees of freedom), Sidak-corrected
 // per-bin thresholds (as in Mitsuba's render tests), and distribution-free confidence intervals of a
 // median from order statistics.

@@ -1,5 +1,5 @@
 #pragma once
-// Timing helpers (DESIGN.md section 6): monotonic clock, median / min / p90 and dispersion of repeats,
+// Timing helpers (docs/design.md section 6): monotonic clock, median / min / p90 and dispersion of repeats,
 // and the rule that decides when enough repeats have been timed (nvbench's --max-noise / --min-time idea:
 // repeat until the median is known to a relative precision, or a time cap).
 #include <chrono>

@@ -28,7 +28,7 @@ struct LookupCounts {
     std::int64_t outside = 0, shadowed = 0;
 };
 
-// A receiver bin holds the mean irradiance over its area (DESIGN.md): n x n lookups per bin, n the number
+// A receiver bin holds the mean irradiance over its area (docs/design.md): n x n lookups per bin, n the number
 // of caustic-map texels a bin side spans (at the chart's corners and centre, the finest wins), so that the
 // lookups see every texel of the bin; at most 16.
 int auto_bin_samples(const PositionsTexture& receivers, const ReceiverChart& chart);

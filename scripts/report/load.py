@@ -37,7 +37,7 @@ def add_derived_columns(frame):
     frame["radiometric"] = _truthy(frame["radiometric"])
     for flag in FLAGS:
         frame[flag] = _truthy(frame[flag]) if flag in frame else False
-    # DESIGN.md section 6: nrmse for radiometric methods, the scale-fitted nrmse otherwise (labelled "fit").
+    # docs/design.md section 6: nrmse for radiometric methods, the scale-fitted nrmse otherwise (labelled "fit").
     frame["error_raw"] = np.where(frame["radiometric"], numeric(frame, "nrmse"), numeric(frame, "nrmse_fit"))
     net = numeric(frame, "error_net")
     frame["error_is_net"] = np.isfinite(net)

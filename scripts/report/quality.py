@@ -4,7 +4,7 @@ import numpy as np
 
 from load import ok_runs
 
-# DESIGN.md section 6: reference noise should be a small fraction of every error a report ranks.
+# docs/design.md section 6: reference noise should be a small fraction of every error a report ranks.
 DEFAULT_NOISE_RATIO_TARGET = 1.0 / 3.0
 
 

@@ -1,5 +1,5 @@
 #pragma once
-// A software rasterizer of 2-D triangles into a float image, shared by methods (DESIGN.md section 2).
+// A software rasterizer of 2-D triangles into a float image, shared by methods (docs/design.md section 2).
 //
 // Coordinates are in pixels: x along a row (column index), y down the rows (row 0 first); pixel (i, j)
 // covers [i, i+1) x [j, j+1) and its centre is (i + 1/2, j + 1/2). Drawing is additive (or overwrites,

@@ -1,4 +1,4 @@
-// Height fields: grid sampling and triangulation, and the surface generators of DESIGN.md section 8.
+// Height fields: grid sampling and triangulation, and the surface generators of docs/design.md section 8.
 // The analytic generators (flat, sine, gaussian) live here; noise, waves and image are in
 // heightfield_noise.cpp, heightfield_waves.cpp and heightfield_image.cpp.
 #include <caustics/scene/heightfield/heightfield.hpp>
