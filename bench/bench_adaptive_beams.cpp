@@ -4,7 +4,8 @@
 // (beam generation, camera beams = volume accumulation with the camera's surface caustics, receiver
 // surface caustics) as counters. Families: the scene (0 sphere_fog, 1 pool_murky), adaptive (16, 3 levels)
 // against the uniform 64 x 64 grid (beams and fill), and the tight hull against the prism (fill and time);
-// the second argument is the thread count (1 or 2).
+// the second argument is the thread count (1 or 2); BM_VolumeView sweeps the volume view's levers
+// (volume_step, volume_subpixels: 1, 1 is the paper's one ray per pixel centre, 2, 2 the defaults).
 #include <benchmark/benchmark.h>
 
 #include <map>
@@ -75,11 +76,18 @@ void run(benchmark::State& state, const std::map<std::string, std::string>& para
 void BM_Adaptive(benchmark::State& state) { run(state, {}); }
 void BM_Uniform64(benchmark::State& state) { run(state, {{"adaptive", "false"}, {"grid", "64"}}); }
 void BM_Prism(benchmark::State& state) { run(state, {{"hull", "prism"}}); }
+// The volume view's levers (volume_view.hpp): node spacing (third argument; 1 = every pixel) and the
+// edge-pixel box filter (fourth argument: sub-rays per side of a refined pixel).
+void BM_VolumeView(benchmark::State& state) {
+    run(state, {{"volume_step", std::to_string(state.range(2))}, {"volume_subpixels", std::to_string(state.range(3))}});
+}
 
 }  // namespace
 
 BENCHMARK(BM_Adaptive)->ArgsProduct({{0, 1}, {1, 2}})->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true)->UseRealTime();
 BENCHMARK(BM_Uniform64)->ArgsProduct({{0, 1}, {2}})->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true)->UseRealTime();
 BENCHMARK(BM_Prism)->ArgsProduct({{0, 1}, {2}})->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true)->UseRealTime();
+
+BENCHMARK(BM_VolumeView)->ArgsProduct({{0, 1}, {1, 2}, {1, 2}, {1, 2}})->Unit(benchmark::kMillisecond)->Repetitions(3)->ReportAggregatesOnly(true)->UseRealTime();
 
 BENCHMARK_MAIN();

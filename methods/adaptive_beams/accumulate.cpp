@@ -1,6 +1,8 @@
 // Scan conversion of the beam hulls into the camera and the receiver map (Sec. 5.1-5.3).
 #include "accumulate.hpp"
+#include "hull_raster.hpp"
 #include "ray_beam.hpp"
+#include "volume_view.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -11,158 +13,10 @@
 #include <tbb/parallel_for.h>
 
 #include <caustics/blocks/raster/raster.hpp>
+#include <caustics/util/timing.hpp>
 
 namespace caustics::adaptive_beams {
 namespace {
-
-constexpr int kBandRows = 8;
-
-double cross2(const glm::dvec2& o, const glm::dvec2& a, const glm::dvec2& b) {
-    return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x);
-}
-
-// Andrew's monotone chain: the convex hull of `pts`, counter-clockwise.
-std::vector<glm::dvec2> convex_hull(std::vector<glm::dvec2> pts) {
-    std::sort(pts.begin(), pts.end(), [](const glm::dvec2& a, const glm::dvec2& b) { return a.x < b.x || (a.x == b.x && a.y < b.y); });
-    if (pts.size() < 3) return pts;
-    std::vector<glm::dvec2> h(2 * pts.size());
-    std::size_t k = 0;
-    for (std::size_t i = 0; i < pts.size(); ++i) {
-        while (k >= 2 && cross2(h[k - 2], h[k - 1], pts[i]) <= 0) --k;
-        h[k++] = pts[i];
-    }
-    for (std::size_t i = pts.size() - 1, t = k + 1; i > 0; --i) {
-        while (k >= t && cross2(h[k - 2], h[k - 1], pts[i - 1]) <= 0) --k;
-        h[k++] = pts[i - 1];
-    }
-    h.resize(k - 1);
-    return h;
-}
-
-// A beam's footprint in the image: the convex polygon its hull projects to (pixel coordinates).
-struct Footprint {
-    std::vector<glm::dvec2> poly;
-    int y_lo = 0, y_hi = -1;   // rows whose centres it may hold
-};
-
-// Projects the hull's corners, first clipping their convex hull by the near plane: the part in front is
-// the hull of the corners in front and of the crossings of every pair of corners with the plane.
-Footprint footprint(const std::array<glm::dvec3, 6>& corners, const CameraModel& cam, int width, int height,
-                    bool& clipped) {
-    constexpr double kNear = 1e-4;
-    double z[6];
-    std::vector<glm::dvec3> front;
-    for (int i = 0; i < 6; ++i) {
-        z[i] = glm::dot(corners[i] - cam.position, cam.forward);
-        if (z[i] > kNear) front.push_back(corners[i]);
-    }
-    clipped = front.size() < 6;
-    Footprint f;
-    if (front.empty()) return f;
-    if (clipped)
-        for (int i = 0; i < 6; ++i)
-            for (int j = i + 1; j < 6; ++j)
-                if ((z[i] > kNear) != (z[j] > kNear)) {
-                    const double t = (kNear - z[i]) / (z[j] - z[i]);
-                    front.push_back(corners[i] + t * (corners[j] - corners[i]));
-                }
-    std::vector<glm::dvec2> pts;
-    for (const glm::dvec3& p : front) {
-        double px = 0.0, py = 0.0;
-        if (cam.project(p, px, py)) pts.push_back({px, py});
-    }
-    f.poly = convex_hull(pts);
-    double lo = 1e300, hi = -1e300;
-    for (const glm::dvec2& p : f.poly) lo = std::min(lo, p.y), hi = std::max(hi, p.y);
-    f.y_lo = static_cast<int>(std::max(0.0, std::ceil(lo - 0.5)));
-    f.y_hi = static_cast<int>(std::min(height - 1.0, std::floor(hi - 0.5)));
-    return f;
-}
-
-// Pixel columns whose centres lie in the convex polygon on row y: [x0, x1], empty when x0 > x1.
-void row_span(const Footprint& f, int y, int width, int& x0, int& x1) {
-    const double yc = y + 0.5;
-    double lo = 1e300, hi = -1e300;
-    const std::size_t n = f.poly.size();
-    for (std::size_t i = 0; i < n; ++i) {
-        const glm::dvec2 a = f.poly[i], b = f.poly[(i + 1) % n];
-        if ((a.y <= yc && b.y >= yc) || (b.y <= yc && a.y >= yc)) {
-            if (a.y == b.y) {
-                lo = std::min({lo, a.x, b.x});
-                hi = std::max({hi, a.x, b.x});
-            } else {
-                const double x = a.x + (yc - a.y) / (b.y - a.y) * (b.x - a.x);
-                lo = std::min(lo, x);
-                hi = std::max(hi, x);
-            }
-        }
-    }
-    x0 = static_cast<int>(std::max(0.0, std::ceil(lo - 0.5)));
-    x1 = static_cast<int>(std::min(width - 1.0, std::floor(hi - 0.5)));
-}
-
-// A beam's pixels: the union of the footprints of up to three pieces of its slab. A beam that passes a
-// focus (A(y) = 0, Sec. 4.3) is cut there: the convex hull of all six corners fills the waist between
-// its two cones with pixels whose rays miss the beam (on `sphere_fog` a third of all fragments); each
-// piece [ya, yb] still holds its part of the beam, as P_i(y) is linear in y and so every cross-section
-// in it lies in the hull of P_i(ya), P_i(yb).
-struct Coverage {
-    std::array<Footprint, 3> part;
-    int parts = 0;
-    int y_lo = 0, y_hi = -1;
-};
-
-Coverage coverage(const Beam& b, HullType hull, const std::array<glm::dvec3, 6>& corners, const CameraModel& cam,
-                  int width, int height, bool& clipped) {
-    Coverage cov;
-    double cut[4] = {b.y0};
-    int nc = 1;
-    if (hull == HullType::Tight && b.flipped) {
-        double r[2];
-        int nr = 0;
-        real_roots(b.a0, b.a1, b.a2, r, nr);
-        std::sort(r, r + nr);
-        for (int k = 0; k < nr; ++k)
-            if (r[k] > b.y0 && r[k] < b.y1) cut[nc++] = r[k];
-    }
-    cut[nc++] = b.y1;
-    clipped = false;
-    for (int k = 0; k + 1 < nc; ++k) {
-        std::array<glm::dvec3, 6> piece = corners;
-        if (nc > 2)
-            for (int i = 0; i < 3; ++i) piece[i] = b.point(i, cut[k]), piece[3 + i] = b.point(i, cut[k + 1]);
-        bool c = false;
-        Footprint f = footprint(piece, cam, width, height, c);
-        clipped = clipped || c;
-        if (f.y_lo > f.y_hi) continue;
-        cov.y_lo = cov.parts == 0 ? f.y_lo : std::min(cov.y_lo, f.y_lo);
-        cov.y_hi = cov.parts == 0 ? f.y_hi : std::max(cov.y_hi, f.y_hi);
-        cov.part[static_cast<std::size_t>(cov.parts++)] = std::move(f);
-    }
-    return cov;
-}
-
-// The pixel columns of row y the coverage holds, as disjoint sorted spans [x0, x1]; returns their number.
-int row_spans(const Coverage& cov, int y, int width, int (&spans)[3][2]) {
-    int n = 0;
-    for (int k = 0; k < cov.parts; ++k) {
-        const Footprint& f = cov.part[static_cast<std::size_t>(k)];
-        if (y < f.y_lo || y > f.y_hi) continue;
-        int x0, x1;
-        row_span(f, y, width, x0, x1);
-        if (x0 > x1) continue;
-        int m = n++;
-        while (m > 0 && spans[m - 1][0] > x0) spans[m][0] = spans[m - 1][0], spans[m][1] = spans[m - 1][1], --m;
-        spans[m][0] = x0, spans[m][1] = x1;
-    }
-    int kept = 0;
-    for (int k = 0; k < n; ++k)
-        if (kept > 0 && spans[k][0] <= spans[kept - 1][1] + 1)
-            spans[kept - 1][1] = std::max(spans[kept - 1][1], spans[k][1]);
-        else
-            spans[kept][0] = spans[k][0], spans[kept][1] = spans[k][1], ++kept;
-    return kept;
-}
 
 // The paper's low-pass filter of the surface caustics (Sec. 7): a tent of radius r over the covered
 // pixels of the same object (so that edges between objects stay sharp), normalised by the weights used.
@@ -192,8 +46,8 @@ void low_pass(Image& img, const CameraGBuffer& g, int r) {
 
 }  // namespace
 
-void accumulate_camera(const BeamSet& set, const Scene& scene, const CameraGBuffer& g, const AccumulateSettings& s,
-                       Image* surface, Image* volume, AccumulateStats& stats) {
+void accumulate_camera(const BeamSet& set, const Scene& scene, const CameraGBuffer& g, const RayTracer* tracer,
+                       const AccumulateSettings& s, Image* surface, Image* volume, AccumulateStats& stats) {
     Camera camera = scene.camera;
     camera.width = g.width;
     camera.height = g.height;
@@ -202,9 +56,14 @@ void accumulate_camera(const BeamSet& set, const Scene& scene, const CameraGBuff
     const bool want_volume = volume && cam_medium.scatters();
     if (surface) *surface = Image(g.width, g.height);
     if (volume) *volume = Image(g.width, g.height);
-    // Which beams take part: volume beams in the camera's medium, surface beams that end on a diffuse surface.
+    Stopwatch clock;
+    // Which beams take part: volume beams in the camera's medium, surface beams that end on a diffuse
+    // surface. A volume beam's pixels are its hull's; a surface beam's are those of its end region only
+    // (from end_tol of its length before its first edge's end to end_tol past its last): a diffuse
+    // surface reaches into a beam where the beam's edges end on it, so a surface smaller than the finest
+    // light-space cell inside a beam (which stops none of its edges) is not lit by that beam.
     const std::size_t nb = set.beams.size();
-    std::vector<Coverage> fp(nb);
+    std::vector<Coverage> vol_px(nb), surf_px(nb);
     std::vector<std::uint8_t> use(nb, 0);
     std::vector<std::uint8_t> clipped(nb, 0), fallback(nb, 0);
     // Each volume beam seen from the camera, once (what its fragments share).
@@ -216,14 +75,23 @@ void accumulate_camera(const BeamSet& set, const Scene& scene, const CameraGBuff
             const bool surf = surface && (set.ends[n] & kEndsOnDiffuse);
             if (!vol && !surf) continue;
             use[n] = static_cast<std::uint8_t>((vol ? 1 : 0) | (surf ? 2 : 0));
-            if (vol) seen[n] = RayBeam(b, cam.position, cam_medium);
-            std::array<glm::dvec3, 6> corners;
-            if (!hull_corners(b, s.hull, corners)) {
-                fallback[n] = 1;
-                hull_corners(b, HullType::Tight, corners);
-            }
             bool c = false;
-            fp[n] = coverage(b, s.hull, corners, cam, g.width, g.height, c);
+            if (vol) {
+                seen[n] = RayBeam(b, cam.position, cam_medium);
+                std::array<glm::dvec3, 6> corners;
+                if (!hull_corners(b, s.hull, corners)) {
+                    fallback[n] = 1;
+                    hull_corners(b, HullType::Tight, corners);
+                }
+                vol_px[n] = coverage(b, s.hull, corners, cam, g.height, c);
+            }
+            if (surf) {
+                const double tol = s.end_tol * (b.y1 - b.y0);
+                const double ya = std::max(b.y0, std::min({b.ye[0], b.ye[1], b.ye[2]}) - tol);
+                bool cs = false;
+                surf_px[n] = slab_coverage(b, ya, b.y1 + tol, cam, g.height, cs);
+                c = c || cs;
+            }
             clipped[n] = c;
         }
     });
@@ -231,59 +99,62 @@ void accumulate_camera(const BeamSet& set, const Scene& scene, const CameraGBuff
         if (!use[n]) continue;
         stats.near_clipped += clipped[n];
         stats.prism_fallback += fallback[n];
-        stats.offscreen += fp[n].y_lo > fp[n].y_hi;
+        stats.offscreen += (!(use[n] & 1) || vol_px[n].y_lo > vol_px[n].y_hi) &&
+                           (!(use[n] & 2) || surf_px[n].y_lo > surf_px[n].y_hi);
     }
-    // Primary ray directions and the distances to the pixels' first hits, once.
-    std::vector<glm::dvec3> dirs(static_cast<std::size_t>(g.width) * g.height);
-    std::vector<double> s_max(dirs.size());
-    tbb::parallel_for(tbb::blocked_range<int>(0, g.height, kBandRows), [&](const tbb::blocked_range<int>& rows) {
-        for (int y = rows.begin(); y != rows.end(); ++y)
-            for (int x = 0; x < g.width; ++x) {
-                const std::size_t i = g.index(x, y);
-                dirs[i] = cam.ray_direction(x + 0.5, y + 0.5);
-                s_max[i] = g.object[i] >= 0 ? glm::length(glm::dvec3(g.position[i]) - cam.position)
-                                            : std::numeric_limits<double>::infinity();
-            }
-    });
-    const int bands = (g.height + kBandRows - 1) / kBandRows;
-    std::vector<std::int64_t> fill(static_cast<std::size_t>(bands), 0), clamp(static_cast<std::size_t>(bands), 0);
-    tbb::parallel_for(tbb::blocked_range<int>(0, bands, 1), [&](const tbb::blocked_range<int>& br) {
-        for (int band = br.begin(); band != br.end(); ++band) {
-            const int r0 = band * kBandRows, r1 = std::min(g.height, r0 + kBandRows) - 1;
-            BeamCounters counters;
-            std::int64_t touched = 0;
-            for (std::size_t n = 0; n < nb; ++n) {
-                if (!use[n] || fp[n].y_hi < r0 || fp[n].y_lo > r1) continue;
-                const Beam& b = set.beams[n];
-                const MediumCoefficients mc = medium_at(scene, b.medium);
-                for (int y = std::max(r0, fp[n].y_lo); y <= std::min(r1, fp[n].y_hi); ++y) {
-                    int spans[3][2];
-                    const int ns = row_spans(fp[n], y, g.width, spans);
-                    for (int k = 0; k < ns; ++k) {
-                        for (int x = spans[k][0]; x <= spans[k][1]; ++x) {
-                            ++touched;
-                            const std::size_t i = g.index(x, y);
-                            const glm::dvec3 w = dirs[i];
-                            if (use[n] & 1)
-                                volume->at(x, y) += static_cast<float>(
-                                    seen[n].radiance(w, s_max[i], s.volume_samples, counters, kVolumeNearDistance));
-                            if ((use[n] & 2) && g.covered[i])
+    stats.hulls_ms += clock.ms();
+    if (surface) {
+        clock.reset();
+        const int bands = (g.height + kBandRows - 1) / kBandRows;
+        std::vector<std::int64_t> fill(static_cast<std::size_t>(bands), 0), clamp(static_cast<std::size_t>(bands), 0);
+        tbb::parallel_for(tbb::blocked_range<int>(0, bands, 1), [&](const tbb::blocked_range<int>& br) {
+            for (int band = br.begin(); band != br.end(); ++band) {
+                const int r0 = band * kBandRows, r1 = std::min(g.height, r0 + kBandRows) - 1;
+                BeamCounters counters;
+                std::int64_t touched = 0;
+                for (std::size_t n = 0; n < nb; ++n) {
+                    const Coverage& cov = surf_px[n];
+                    if (!(use[n] & 2) || cov.y_hi < r0 || cov.y_lo > r1) continue;
+                    const Beam& b = set.beams[n];
+                    const double sigma_t = medium_at(scene, b.medium).extinction();
+                    for (int y = std::max(r0, cov.y_lo); y <= std::min(r1, cov.y_hi); ++y) {
+                        int spans[3][2];
+                        const int ns = row_spans(cov, y, g.width, false, spans);
+                        for (int k = 0; k < ns; ++k)
+                            for (int x = spans[k][0]; x <= spans[k][1]; ++x) {
+                                ++touched;
+                                const std::size_t i = g.index(x, y);
+                                if (!g.covered[i]) continue;
                                 surface->at(x, y) += static_cast<float>(surface_irradiance(
-                                    b, mc.extinction(), glm::dvec3(g.position[i]), glm::dvec3(g.normal[i]), true, s.end_tol,
+                                    b, sigma_t, glm::dvec3(g.position[i]), glm::dvec3(g.normal[i]), true, s.end_tol,
                                     counters));
-                        }
+                            }
                     }
                 }
+                fill[static_cast<std::size_t>(band)] = touched;
+                clamp[static_cast<std::size_t>(band)] = counters.clamped;
             }
-            fill[static_cast<std::size_t>(band)] = touched;
-            clamp[static_cast<std::size_t>(band)] = counters.clamped;
+        });
+        for (int band = 0; band < bands; ++band) {
+            stats.fill += fill[static_cast<std::size_t>(band)];
+            stats.clamped += clamp[static_cast<std::size_t>(band)];
         }
-    });
-    for (int band = 0; band < bands; ++band) {
-        stats.fill += fill[static_cast<std::size_t>(band)];
-        stats.clamped += clamp[static_cast<std::size_t>(band)];
+        low_pass(*surface, g, s.filter);
+        stats.surface_ms += clock.ms();
     }
-    if (surface) low_pass(*surface, g, s.filter);
+    if (want_volume) {
+        clock.reset();
+        std::vector<VolumeBeam> beams;
+        for (std::size_t n = 0; n < nb; ++n)
+            if (use[n] & 1) beams.push_back({&seen[n], &vol_px[n]});
+        VolumeStats vs;
+        render_volume(beams, cam, g, tracer, s.volume, *volume, vs);
+        stats.fill += vs.fill;
+        stats.clamped += vs.clamped;
+        stats.volume_rays += vs.rays;
+        stats.volume_refined += vs.refined;
+        stats.volume_ms += clock.ms();
+    }
 }
 
 void accumulate_receiver(const BeamSet& set, const Scene& scene, const ReceiverChart& chart, const AccumulateSettings& s,

@@ -14,12 +14,13 @@
 #include <caustics/util/image.hpp>
 
 #include "light_grid.hpp"
+#include "volume_view.hpp"
 
 namespace caustics::adaptive_beams {
 
 struct AccumulateSettings {
     HullType hull = HullType::Tight;
-    int volume_samples = 2;     // Gauss-Legendre points per ray-beam interval (1: the paper's midpoint)
+    VolumeSettings volume;      // the volume view: Gauss points, node spacing, refinement, sub-rays
     int receiver_samples = 3;   // stratified point-in-beam samples per bin side on the receiver map
     int filter = 1;             // camera surface caustics: tent filter radius [pixels], 0 = none
     double end_tol = 0.05;      // a surface point may lie this fraction of a beam's length past its end
@@ -31,12 +32,17 @@ struct AccumulateStats {
     std::int64_t near_clipped = 0;    // hulls cut by the camera's near plane (beams that leave the frustum behind it)
     std::int64_t offscreen = 0;       // hulls wholly outside the image (beams that leave the frustum)
     std::int64_t prism_fallback = 0;  // prism hull not formed: the tight corners were used
+    std::int64_t volume_rays = 0;     // (beam, ray) integrals of the volume view
+    std::int64_t volume_refined = 0;  // volume view pixels evaluated in full (the others interpolated)
+    double hulls_ms = 0.0;            // the camera's stages: the beams' pixels (hull scan conversion),
+    double surface_ms = 0.0;          // the surface caustics of the camera view,
+    double volume_ms = 0.0;           // the volume view
 };
 
-// Fills `surface` (E_c at covered pixels, when non-null) and `volume` (L_v, when non-null), both sized to
-// the G-buffer; `camera_medium` is the medium the primary rays travel in.
-void accumulate_camera(const BeamSet& set, const Scene& scene, const CameraGBuffer& gbuffer, const AccumulateSettings& s,
-                       Image* surface, Image* volume, AccumulateStats& stats);
+// Fills `surface` (E_c at covered pixels, when non-null) and `volume` (L_v, when non-null, volume_view.hpp),
+// both sized to the G-buffer. The tracer (may be null) finds the first hits of the volume view's sub-rays.
+void accumulate_camera(const BeamSet& set, const Scene& scene, const CameraGBuffer& gbuffer, const RayTracer* tracer,
+                       const AccumulateSettings& s, Image* surface, Image* volume, AccumulateStats& stats);
 
 // Fills the receiver map (chart width x height, mean E_c per bin).
 void accumulate_receiver(const BeamSet& set, const Scene& scene, const ReceiverChart& chart, const AccumulateSettings& s,

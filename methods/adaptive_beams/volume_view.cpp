@@ -1,0 +1,235 @@
+// The volume view's nodes, smooth blocks and refined pixels (Sec. 5.1, 5.2; see volume_view.hpp).
+#include "volume_view.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+namespace caustics::adaptive_beams {
+namespace {
+
+constexpr double kNoHit = std::numeric_limits<double>::infinity();
+// A smooth block's pixels lie within this fraction of the bilinear depth of its nodes (a fold or a
+// silhouette of one object inside the block refines it).
+constexpr double kDepthTolerance = 0.05;
+
+// The rays of one pass: per pixel `per_pixel` rays from `first[pixel]` (-1: the pixel is not in the pass),
+// and per row the sorted columns in the pass.
+struct Pass {
+    std::vector<int> first;
+    int per_pixel = 1;
+    std::vector<glm::dvec3> dir;
+    std::vector<double> s_max;
+    std::vector<std::vector<int>> columns;
+    bool box = false;   // rays anywhere in the pixel's square: walk the pixels the hulls overlap
+};
+
+double gbuffer_depth(const CameraGBuffer& g, const CameraModel& cam, std::size_t i) {
+    return g.object[i] >= 0 ? glm::length(glm::dvec3(g.position[i]) - cam.position) : kNoHit;
+}
+
+// Mean over each pass pixel's rays of the sum over beams of their integrals: out[pixel] (pixels of the
+// pass only). Bands of rows are independent; each walks the beams in order.
+void evaluate(const Pass& pass, const std::vector<VolumeBeam>& beams, const CameraGBuffer& g, int samples,
+              std::vector<double>& out, VolumeStats& stats) {
+    const int W = g.width, H = g.height;
+    const int bands = (H + kBandRows - 1) / kBandRows;
+    std::vector<VolumeStats> per_band(static_cast<std::size_t>(bands));
+    tbb::parallel_for(tbb::blocked_range<int>(0, bands, 1), [&](const tbb::blocked_range<int>& br) {
+        for (int band = br.begin(); band != br.end(); ++band) {
+            const int r0 = band * kBandRows, r1 = std::min(H, r0 + kBandRows) - 1;
+            bool any = false;
+            for (int y = r0; y <= r1 && !any; ++y) any = !pass.columns[static_cast<std::size_t>(y)].empty();
+            if (!any) continue;
+            BeamCounters counters;
+            VolumeStats& st = per_band[static_cast<std::size_t>(band)];
+            for (const VolumeBeam& vb : beams) {
+                const Coverage& cov = *vb.pixels;
+                const int lo = pass.box ? cov.box_lo : cov.y_lo, hi = pass.box ? cov.box_hi : cov.y_hi;
+                if (hi < r0 || lo > r1) continue;
+                for (int y = std::max(r0, lo); y <= std::min(r1, hi); ++y) {
+                    const std::vector<int>& cols = pass.columns[static_cast<std::size_t>(y)];
+                    if (cols.empty()) continue;
+                    int spans[3][2];
+                    const int ns = row_spans(cov, y, W, pass.box, spans);
+                    for (int k = 0; k < ns; ++k) {
+                        auto it = std::lower_bound(cols.begin(), cols.end(), spans[k][0]);
+                        for (; it != cols.end() && *it <= spans[k][1]; ++it) {
+                            const std::size_t i = g.index(*it, y);
+                            const auto r = static_cast<std::size_t>(pass.first[i]);
+                            double sum = 0.0;
+                            for (int q = 0; q < pass.per_pixel; ++q)
+                                sum += vb.beam->radiance(pass.dir[r + q], pass.s_max[r + q], samples, counters,
+                                                         kVolumeNearDistance);
+                            out[i] += sum;
+                            ++st.fill;
+                            st.rays += pass.per_pixel;
+                        }
+                    }
+                }
+            }
+            st.clamped = counters.clamped;
+        }
+    });
+    for (const VolumeStats& st : per_band) {
+        stats.fill += st.fill;
+        stats.rays += st.rays;
+        stats.clamped += st.clamped;
+    }
+    if (pass.per_pixel > 1)
+        for (std::size_t i = 0; i < out.size(); ++i)
+            if (pass.first[i] >= 0) out[i] /= pass.per_pixel;
+}
+
+// Node positions along one axis of n pixels: 0, step, 2 step, ... and n - 1.
+std::vector<int> lattice(int n, int step) {
+    std::vector<int> v;
+    for (int x = 0; x < n; x += step) v.push_back(x);
+    if (v.back() != n - 1) v.push_back(n - 1);
+    return v;
+}
+
+}  // namespace
+
+void render_volume(const std::vector<VolumeBeam>& beams, const CameraModel& cam, const CameraGBuffer& g,
+                   const RayTracer* tracer, const VolumeSettings& s, Image& volume, VolumeStats& stats) {
+    const int W = g.width, H = g.height;
+    const std::size_t np = static_cast<std::size_t>(W) * static_cast<std::size_t>(H);
+    volume = Image(W, H);
+    if (np == 0) return;
+    // A single row or column has no blocks: every pixel is a node.
+    const int step = W < 2 || H < 2 ? 1 : std::max(1, s.step), sub = std::max(1, s.subpixels);
+    const std::vector<int> cx = lattice(W, step), cy = lattice(H, step);
+
+    // Nodes: one ray through each node pixel's centre.
+    Pass nodes;
+    nodes.first.assign(np, -1);
+    nodes.columns.resize(static_cast<std::size_t>(H));
+    for (int y : cy) {
+        nodes.columns[static_cast<std::size_t>(y)] = cx;
+        for (int x : cx) {
+            const std::size_t i = g.index(x, y);
+            nodes.first[i] = static_cast<int>(nodes.dir.size());
+            nodes.dir.push_back(cam.ray_direction(x + 0.5, y + 0.5));
+            nodes.s_max.push_back(gbuffer_depth(g, cam, i));
+        }
+    }
+    std::vector<double> value(np, 0.0);
+    evaluate(nodes, beams, g, s.samples, value, stats);
+    if (step == 1 && sub == 1) {
+        for (std::size_t i = 0; i < np; ++i) volume.pixels[i] = static_cast<float>(value[i]);
+        return;
+    }
+
+    // Blocks between four nodes: smooth (interpolated) or refined (every pixel evaluated).
+    const int bx_n = static_cast<int>(cx.size()) - 1, by_n = static_cast<int>(cy.size()) - 1;
+    std::vector<std::uint8_t> rough(static_cast<std::size_t>(std::max(0, bx_n * by_n)), 0);
+    tbb::parallel_for(tbb::blocked_range<int>(0, by_n), [&](const tbb::blocked_range<int>& r) {
+        for (int by = r.begin(); by != r.end(); ++by)
+            for (int bx = 0; bx < bx_n; ++bx) {
+                const int x0 = cx[static_cast<std::size_t>(bx)], x1 = cx[static_cast<std::size_t>(bx) + 1];
+                const int y0 = cy[static_cast<std::size_t>(by)], y1 = cy[static_cast<std::size_t>(by) + 1];
+                const std::size_t c[4] = {g.index(x0, y0), g.index(x1, y0), g.index(x0, y1), g.index(x1, y1)};
+                double lo = value[c[0]], hi = lo;
+                for (std::size_t k : c) lo = std::min(lo, value[k]), hi = std::max(hi, value[k]);
+                bool smooth = hi - lo <= s.refine * 0.5 * (hi + lo);
+                const int object = g.object[c[0]];
+                double d[4];
+                for (int k = 0; k < 4; ++k) d[k] = gbuffer_depth(g, cam, c[k]);
+                for (int y = y0; y <= y1 && smooth; ++y)
+                    for (int x = x0; x <= x1 && smooth; ++x) {
+                        const std::size_t i = g.index(x, y);
+                        if (g.object[i] != object) smooth = false;
+                        else if (object >= 0) {
+                            const double tx = double(x - x0) / (x1 - x0), ty = double(y - y0) / (y1 - y0);
+                            const double bilinear = (1 - ty) * ((1 - tx) * d[0] + tx * d[1]) + ty * ((1 - tx) * d[2] + tx * d[3]);
+                            const double depth = gbuffer_depth(g, cam, i);
+                            smooth = std::abs(depth - bilinear) <= kDepthTolerance * depth;
+                        }
+                    }
+                rough[static_cast<std::size_t>(by) * bx_n + bx] = smooth ? 0 : 1;
+            }
+    });
+    // A pixel is refined when a block holding it is (pixels on a block's edge belong to two blocks).
+    auto blocks_of = [&](const std::vector<int>& nodes, int x, int& b0, int& b1) {
+        const int k = static_cast<int>(std::upper_bound(nodes.begin(), nodes.end(), x) - nodes.begin()) - 1;
+        const int last = static_cast<int>(nodes.size()) - 2;
+        b1 = std::min(k, last);
+        b0 = nodes[static_cast<std::size_t>(k)] == x && k > 0 ? k - 1 : b1;
+    };
+    std::vector<std::uint8_t> refined(np, 0);
+    tbb::parallel_for(tbb::blocked_range<int>(0, H, kBandRows), [&](const tbb::blocked_range<int>& r) {
+        for (int y = r.begin(); y != r.end(); ++y) {
+            int ya, yb;
+            blocks_of(cy, y, ya, yb);
+            for (int x = 0; x < W; ++x) {
+                int xa, xb;
+                blocks_of(cx, x, xa, xb);
+                bool any = false;
+                for (int by = ya; by <= yb && !any; ++by)
+                    for (int bx = xa; bx <= xb && !any; ++bx) any = rough[static_cast<std::size_t>(by) * bx_n + bx] != 0;
+                refined[g.index(x, y)] = any ? 1 : 0;
+            }
+        }
+    });
+
+    // Refined pixels, each as the mean of sub x sub stratified rays (centre rays: nodes are done).
+    Pass full;
+    full.per_pixel = sub * sub;
+    full.box = sub > 1;
+    full.first.assign(np, -1);
+    full.columns.resize(static_cast<std::size_t>(H));
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            const std::size_t i = g.index(x, y);
+            if (!refined[i] || (sub == 1 && nodes.first[i] >= 0)) continue;
+            full.columns[static_cast<std::size_t>(y)].push_back(x);
+            full.first[i] = static_cast<int>(full.dir.size());
+            for (int a = 0; a < sub; ++a)
+                for (int b = 0; b < sub; ++b) {
+                    full.dir.push_back(cam.ray_direction(x + (b + 0.5) / sub, y + (a + 0.5) / sub));
+                    full.s_max.push_back(gbuffer_depth(g, cam, i));
+                }
+        }
+    if (sub > 1 && tracer) {
+        std::vector<RayQuery> q(full.dir.size());
+        for (std::size_t k = 0; k < q.size(); ++k) q[k].origin = cam.position, q[k].dir = full.dir[k];
+        std::vector<Hit> hits(q.size());
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, q.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+            tracer->intersect(q.data() + r.begin(), r.size(), hits.data() + r.begin());
+        });
+        for (std::size_t k = 0; k < q.size(); ++k) full.s_max[k] = hits[k].valid ? hits[k].t : kNoHit;
+    }
+    std::vector<double> full_value(np, 0.0);
+    evaluate(full, beams, g, s.samples, full_value, stats);
+
+    // Compose: refined pixels, nodes, and the bilinear interpolation of the rest.
+    tbb::parallel_for(tbb::blocked_range<int>(0, H, kBandRows), [&](const tbb::blocked_range<int>& r) {
+        for (int y = r.begin(); y != r.end(); ++y) {
+            const int by = std::min(y / step, by_n - 1);
+            for (int x = 0; x < W; ++x) {
+                const std::size_t i = g.index(x, y);
+                double v;
+                if (full.first[i] >= 0) v = full_value[i];
+                else if (nodes.first[i] >= 0) v = value[i];
+                else {
+                    const int bx = std::min(x / step, bx_n - 1);
+                    const int x0 = cx[static_cast<std::size_t>(bx)], x1 = cx[static_cast<std::size_t>(bx) + 1];
+                    const int y0 = cy[static_cast<std::size_t>(by)], y1 = cy[static_cast<std::size_t>(by) + 1];
+                    const double tx = double(x - x0) / (x1 - x0), ty = double(y - y0) / (y1 - y0);
+                    v = (1 - ty) * ((1 - tx) * value[g.index(x0, y0)] + tx * value[g.index(x1, y0)]) +
+                        ty * ((1 - tx) * value[g.index(x0, y1)] + tx * value[g.index(x1, y1)]);
+                }
+                volume.pixels[i] = static_cast<float>(v);
+            }
+        }
+    });
+    std::int64_t n_refined = 0;
+    for (std::size_t i = 0; i < np; ++i) n_refined += refined[i];
+    stats.refined += n_refined;
+}
+
+}  // namespace caustics::adaptive_beams
