@@ -52,7 +52,8 @@ function(caustics_add_method name)
   configure_file(${_CAUSTICS_METHOD_LIST_DIR}/caustics_plugin_entry.cpp ${entry} COPYONLY)
   add_library(method_${name} OBJECT ${sources} ${entry})
   target_link_libraries(method_${name} PUBLIC caustics::api caustics::blocks)
-  target_compile_definitions(method_${name} PRIVATE ${origin} CAUSTICS_PLUGIN CAUSTICS_SDK_VERSION="${caustics_VERSION}")
+  target_compile_definitions(method_${name} PRIVATE ${origin} CAUSTICS_PLUGIN CAUSTICS_SDK_VERSION="${caustics_VERSION}"
+                             CAUSTICS_PLUGIN_BUILD_TYPE="$<IF:$<BOOL:$<CONFIG>>,$<CONFIG>,none>")
   set_target_properties(method_${name} PROPERTIES POSITION_INDEPENDENT_CODE ON CXX_VISIBILITY_PRESET hidden
                         VISIBILITY_INLINES_HIDDEN ON)
   add_library(caustics_plugin_${name} MODULE $<TARGET_OBJECTS:method_${name}>)

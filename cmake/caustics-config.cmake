@@ -22,6 +22,12 @@ find_dependency(TBB)
 find_dependency(TinyGLTF)
 find_dependency(nlohmann_json)
 
+# A plugin is timed inside an optimised program: unless the project chose a build type, build it
+# optimised too (a single-configuration generator with no CMAKE_BUILD_TYPE compiles without -O).
+if(NOT CMAKE_CONFIGURATION_TYPES AND NOT CMAKE_BUILD_TYPE)
+  set(CMAKE_BUILD_TYPE Release CACHE STRING "Build type (set by find_package(caustics) when none was chosen)" FORCE)
+endif()
+
 include(${CMAKE_CURRENT_LIST_DIR}/caustics-targets.cmake)
 get_filename_component(CAUSTICS_DATA_DIR ${CMAKE_CURRENT_LIST_DIR}/../../../share/caustics ABSOLUTE)
 include(${CMAKE_CURRENT_LIST_DIR}/CausticsMethod.cmake)

@@ -1,6 +1,11 @@
 // The entry point of a method plugin, compiled into every plugin library by caustics_add_method()
-// (api/plugin.hpp). CAUSTICS_SDK_VERSION is the version of the installed caustics package.
+// (api/plugin.hpp). CAUSTICS_SDK_VERSION is the version of the installed caustics package,
+// CAUSTICS_PLUGIN_BUILD_TYPE the plugin's own build type.
 #include <vector>
+
+#ifndef CAUSTICS_PLUGIN_BUILD_TYPE
+#define CAUSTICS_PLUGIN_BUILD_TYPE "unknown"
+#endif
 
 #include <caustics/api/plugin.hpp>
 
@@ -24,4 +29,5 @@ extern "C" [[gnu::visibility("default")]] void caustics_plugin_register_v1(caust
     manifest->sdk_version = CAUSTICS_SDK_VERSION;
     manifest->methods = caustics::plugin::methods().data();
     manifest->count = caustics::plugin::methods().size();
+    manifest->build_type = CAUSTICS_PLUGIN_BUILD_TYPE;
 }

@@ -205,9 +205,11 @@ TEST_F(CliTest, RenderWritesFilesAndKeys) {
                           "update_ms", "stages_ms", "threads", "error", "reference", "health", "status",
                           "build_type", "warmup", "repeats", "below_reference_noise", "message", "frame_ms",
                           "frame_time", "render_fps", "noisy_timing", "truth", "baseline", "no_better_than_flat",
-                          "claim", "baseline_volume"})
+                          "claim", "baseline_volume", "method_build_type"})
         EXPECT_TRUE(m.contains(k)) << k;
-    EXPECT_EQ(m.size(), 29u) << m.dump(2);
+    EXPECT_EQ(m.size(), 30u) << m.dump(2);
+    // A method compiled into the program has the program's build type.
+    EXPECT_EQ(m["method_build_type"], m["build_type"]);
     for (const char* k : {"inside", "max_error", "bound", "reason", "bounds", "met"}) EXPECT_TRUE(m["claim"].contains(k)) << k;
     for (const char* t : {"time_ms", "frame_ms"})
         for (const char* k : {"median", "min", "p90", "stdev", "iqr", "ci_rel"}) {

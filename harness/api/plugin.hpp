@@ -25,6 +25,9 @@ struct Manifest {
     const char* sdk_version = nullptr;   // the caustics version the plugin was built against
     const Method* methods = nullptr;
     std::size_t count = 0;
+    // Appended after the first release (the program zero-fills the manifest, so an older plugin leaves it
+    // null): the plugin's own CMAKE_BUILD_TYPE, recorded in metrics.json beside the program's.
+    const char* build_type = nullptr;
 };
 
 // Defined by the generated entry source, once per plugin and hidden, so that two plugins never share

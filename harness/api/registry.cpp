@@ -11,6 +11,7 @@ namespace {
 struct Entry {
     std::unique_ptr<MethodInfo> info;
     std::string origin;
+    std::string build_type;   // "" for a method compiled into the program
 };
 
 // Function-local statics: registration runs during static initialisation of the method objects, whose
@@ -27,7 +28,7 @@ std::vector<std::string>& conflicts() {
 
 }  // namespace
 
-void add_method(MethodFactory make, const std::string& origin) {
+void add_method(MethodFactory make, const std::string& origin, const std::string& build_type) {
     std::unique_ptr<MethodInfo> info;
     try {
         info = std::make_unique<MethodInfo>(make());
@@ -42,7 +43,7 @@ void add_method(MethodFactory make, const std::string& origin) {
         throw InputError(origin, name,
                          "a method of this name is already registered by " + it->second.origin +
                              "; method names must be unique: rename one of them");
-    table()[name] = Entry{std::move(info), origin};
+    table()[name] = Entry{std::move(info), origin, build_type};
 }
 
 MethodRegistrar::MethodRegistrar(MethodFactory make, const char* origin) {
@@ -69,6 +70,11 @@ const MethodInfo* find_method(const std::string& name) {
 std::string method_origin(const std::string& name) {
     auto it = table().find(name);
     return it == table().end() ? std::string() : it->second.origin;
+}
+
+std::string method_build_type(const std::string& name) {
+    auto it = table().find(name);
+    return it == table().end() ? std::string() : it->second.build_type;
 }
 
 const MethodInfo& require_method(const std::string& name, const std::string& option) {

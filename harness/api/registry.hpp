@@ -29,10 +29,14 @@ const MethodInfo& require_method(const std::string& name, const std::string& opt
 // library with the source line inside it.
 std::string method_origin(const std::string& name);
 
-// Adds the method `make` describes, registered at `origin`. A name already taken is refused with an
-// InputError naming `origin` (the file at fault), the name and where the first registration came from;
-// the first method stays.
-void add_method(MethodFactory make, const std::string& origin);
+// The build type a plugin method was compiled with ("Release", "Debug", "none" when the plugin's build
+// set none); "" for a method compiled into the program (it has the program's build type).
+std::string method_build_type(const std::string& name);
+
+// Adds the method `make` describes, registered at `origin` (for a plugin, with its build type). A name
+// already taken is refused with an InputError naming `origin` (the file at fault), the name and where the
+// first registration came from; the first method stays.
+void add_method(MethodFactory make, const std::string& origin, const std::string& build_type = "");
 
 // The registrations refused while static initialisation ran (when nothing can report them), one message
 // each as add_method words it. The program refuses to start while there is any.

@@ -53,7 +53,8 @@ void load_plugin(const fs::path& library) {
         throw InputError(path, "", "built against caustics " + built_for + ", this program is caustics " +
                                        project_version() + "; rebuild the plugin against this installation");
     for (std::size_t i = 0; i < manifest.count; ++i)
-        add_method(manifest.methods[i].make, path + " (" + manifest.methods[i].where + ")");
+        add_method(manifest.methods[i].make, path + " (" + manifest.methods[i].where + ")",
+                   manifest.build_type ? manifest.build_type : "unknown");
 }
 
 }  // namespace

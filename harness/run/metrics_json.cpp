@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include <caustics/api/registry.hpp>
 #include <caustics/run/resolved_method.hpp>
 #include <caustics/run/run_errors.hpp>
 #include <caustics/run/scene_frame.hpp>
@@ -61,6 +62,10 @@ json metrics_skeleton(const SceneFrame& sf, const ResolvedMethod& m, const Rende
     j["health"] = json::object();
     j["status"] = nullptr;
     j["build_type"] = build_type();
+    // A plugin is compiled apart from the program: its own build type (an unoptimised plugin in an
+    // optimised program is timed as what it is).
+    const std::string plugin_build = method_build_type(m.info->name);
+    j["method_build_type"] = plugin_build.empty() ? std::string(build_type()) : plugin_build;
     j["warmup"] = options.warmup;
     j["repeats"] = options.repeats;
     j["below_reference_noise"] = nullptr;

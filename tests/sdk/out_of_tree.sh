@@ -41,6 +41,9 @@ assert m["method"] == "flat_field" and m["status"] == "ok", (m["method"], m["sta
 r = m["error"]["receiver"]
 assert m["truth"]["kind"].startswith("analytic"), m["truth"]
 assert abs(r["nrmse"] - m["baseline"]["error"]) < 1e-9 * m["baseline"]["error"], (r["nrmse"], m["baseline"])
+# Configured with no build type, the plugin was built optimised and says so beside the program's.
+assert m["method_build_type"] == "Release", m["method_build_type"]
+assert m["build_type"], m["build_type"]
 PY
 echo "listed and rendered flat_field from $plugins"
 

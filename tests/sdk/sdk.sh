@@ -34,7 +34,8 @@ sdk_build_method() {
     local prefix=$1 source=$2 out=$3
     local launcher=()
     [[ -n ${CAUSTICS_SDK_LAUNCHER:-} ]] && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER="$CAUSTICS_SDK_LAUNCHER")
-    cmake -S "$source" -B "$out" -G Ninja -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$prefix" \
+    # No CMAKE_BUILD_TYPE: the package's default (Release) is what a user gets.
+    cmake -S "$source" -B "$out" -G Ninja -DCMAKE_PREFIX_PATH="$prefix" \
         -DCMAKE_CXX_COMPILER="${CAUSTICS_SDK_CXX:-c++}" "${launcher[@]}" >"$out.configure.log" 2>&1 || { cat "$out.configure.log" >&2; sdk_fail "configure $source"; }
     cmake --build "$out" -j2 || sdk_fail "build $source against $prefix"
     ctest --test-dir "$out" --output-on-failure || sdk_fail "the tests of $source"
