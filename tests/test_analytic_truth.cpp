@@ -32,6 +32,8 @@ struct ReferenceCase {
     SineSetup setup;
     std::uint64_t photons;
 };
+// ctest lists the case by its name, not by a byte dump of the struct.
+inline void PrintTo(const ReferenceCase& c, std::ostream* os) { *os << c.name; }
 
 class TruthAgainstReference : public ::testing::TestWithParam<ReferenceCase> {};
 

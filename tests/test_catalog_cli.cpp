@@ -29,6 +29,8 @@ struct CatalogCase {
     std::string name;
     std::function<Probe(const CaseDir&)> make;
 };
+// ctest lists the case by its name, not by a byte dump of the struct.
+inline void PrintTo(const CatalogCase& c, std::ostream* os) { *os << c.name; }
 
 std::string small_scene(const CaseDir& d) {
     const nlohmann::json camera = {{"position", {0, -1.3, 1.4}}, {"look_at", {0, 0, -0.4}}, {"up", {0, 0, 1}},

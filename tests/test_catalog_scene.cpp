@@ -121,6 +121,8 @@ struct SceneCase {
     std::optional<std::string> memory_limit = std::nullopt;   // CAUSTICS_MEMORY_LIMIT_GB for the child
     bool names_scene = true;                                   // the message names the scene file
 };
+// ctest lists the case by its name, not by a byte dump of the struct.
+inline void PrintTo(const SceneCase& c, std::ostream* os) { *os << c.name; }
 
 std::vector<SceneCase> cases() {
     const std::string sine_amplitude = "objects[0].generator.amplitude";
