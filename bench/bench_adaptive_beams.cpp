@@ -69,6 +69,7 @@ void run(benchmark::State& state, const std::map<std::string, std::string>& para
     for (const auto& [name, ms] : stages) state.counters[name + "_ms"] = ms / static_cast<double>(state.iterations());
     state.counters["beams"] = static_cast<double>(last.health.get("beams_generated"));
     state.counters["fill"] = static_cast<double>(last.health.get("fill"));
+    state.counters["volume_rays"] = static_cast<double>(last.health.get("volume_rays"));
     state.SetLabel(std::string(state.range(0) == 0 ? "sphere_fog" : "pool_murky") + ", " +
                    std::to_string(state.range(1)) + " thread(s)");
 }
