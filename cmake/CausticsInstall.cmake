@@ -65,9 +65,9 @@ install(DIRECTORY ${PROJECT_SOURCE_DIR}/scripts/report/ DESTINATION share/causti
         PATTERN "tests" EXCLUDE PATTERN "__pycache__" EXCLUDE)
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/scripts/sweeps/ DESTINATION share/caustics/scripts/sweeps)
 # Written again at install time: an install after a partial build (one target, not `all`) must not
-# miss it, and it names the commit of what is being installed.
-install(CODE "execute_process(COMMAND \"${CMAKE_COMMAND}\" -DSOURCE=${PROJECT_SOURCE_DIR} -DVERSION=${PROJECT_VERSION}
-                              -DOUT=${PROJECT_BINARY_DIR}/package/build.json -P ${PROJECT_SOURCE_DIR}/cmake/CausticsBuildInfo.cmake
+# miss it. It names the source tree's commit at install time (the build's own, unless the tree moved on).
+install(CODE "execute_process(COMMAND \"${CMAKE_COMMAND}\" \"-DSOURCE=${PROJECT_SOURCE_DIR}\" \"-DVERSION=${PROJECT_VERSION}\"
+                              \"-DOUT=${PROJECT_BINARY_DIR}/package/build.json\" -P \"${PROJECT_SOURCE_DIR}/cmake/CausticsBuildInfo.cmake\"
                               COMMAND_ERROR_IS_FATAL ANY)")
 install(FILES ${PROJECT_BINARY_DIR}/package/build.json DESTINATION share/caustics)
 

@@ -24,8 +24,10 @@ find_dependency(nlohmann_json)
 
 # A plugin is timed inside an optimised program: unless the project chose a build type, build it
 # optimised too (a single-configuration generator with no CMAKE_BUILD_TYPE compiles without -O).
+# A plain variable in the calling scope: the project's cache is left as it is.
 if(NOT CMAKE_CONFIGURATION_TYPES AND NOT CMAKE_BUILD_TYPE)
-  set(CMAKE_BUILD_TYPE Release CACHE STRING "Build type (set by find_package(caustics) when none was chosen)" FORCE)
+  set(CMAKE_BUILD_TYPE Release)
+  message(STATUS "caustics: no CMAKE_BUILD_TYPE chosen, methods are built as Release")
 endif()
 
 include(${CMAKE_CURRENT_LIST_DIR}/caustics-targets.cmake)

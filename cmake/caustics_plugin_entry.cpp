@@ -25,7 +25,7 @@ void record(MethodInfo (*make)(), const char* where) { methods().push_back({make
 
 }  // namespace caustics::plugin
 
-extern "C" [[gnu::visibility("default")]] void caustics_plugin_register_v1(caustics::plugin::Manifest* manifest) {
+extern "C" [[gnu::visibility("default")]] void caustics_plugin_register_v2(caustics::plugin::Manifest* manifest) {
     manifest->sdk_version = CAUSTICS_SDK_VERSION;
     manifest->methods = caustics::plugin::methods().data();
     manifest->count = caustics::plugin::methods().size();

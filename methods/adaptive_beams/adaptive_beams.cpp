@@ -174,7 +174,7 @@ MethodInfo method_info() {
          {"1", "2"}},
         {"volume_refine", ParamType::Float, "1.0", 0.0, 1e6, {},
          "camera_volume: a block is evaluated in full where its nodes' radiances differ by more than this fraction "
-         "of their mean (0: every block), or its pixels see another object or a depth 5 % off the bilinear one"},
+         "of their mean (0: every block whose nodes differ at all), or its pixels see another object or a depth 5 % off the bilinear one"},
         {"volume_subpixels", ParamType::Int, "2", 1, 16, {},
          "camera_volume: rays per side of a fully evaluated pixel of a refined block (stratified over the pixel's "
          "square, each to its own first hit: the box filter at the light cone's edges; 1: the centre, the paper)"},

@@ -29,6 +29,13 @@ std::vector<glm::dvec2> convex_hull(std::vector<glm::dvec2> pts) {
     return h;
 }
 
+// A pixel index from a bound that may be far outside the image (or +-1e300 for an empty polygon): clamped
+// to [-1, n] before the cast, which is undefined for values an int cannot hold.
+int to_index(double v, int n) {
+    if (!(v > -1.0)) return -1;
+    return v > n ? n : static_cast<int>(v);
+}
+
 // Projects the hull's corners, first clipping their convex hull by the near plane: the part in front is
 // the hull of the corners in front and of the crossings of every pair of corners with the plane.
 Footprint footprint(const std::array<glm::dvec3, 6>& corners, const CameraModel& cam, int height, bool& clipped) {
@@ -57,10 +64,10 @@ Footprint footprint(const std::array<glm::dvec3, 6>& corners, const CameraModel&
     f.poly = convex_hull(pts);
     double lo = 1e300, hi = -1e300;
     for (const glm::dvec2& p : f.poly) lo = std::min(lo, p.y), hi = std::max(hi, p.y);
-    f.y_lo = static_cast<int>(std::max(0.0, std::ceil(lo - 0.5)));
-    f.y_hi = static_cast<int>(std::min(height - 1.0, std::floor(hi - 0.5)));
-    f.box_lo = static_cast<int>(std::max(0.0, std::floor(lo)));
-    f.box_hi = static_cast<int>(std::min(height - 1.0, std::ceil(hi) - 1.0));
+    f.y_lo = to_index(std::max(0.0, std::ceil(lo - 0.5)), height);
+    f.y_hi = to_index(std::min(height - 1.0, std::floor(hi - 0.5)), height);
+    f.box_lo = to_index(std::max(0.0, std::floor(lo)), height);
+    f.box_hi = to_index(std::min(height - 1.0, std::ceil(hi) - 1.0), height);
     return f;
 }
 
@@ -87,8 +94,8 @@ void row_span(const Footprint& f, int y, int width, bool box, int& x0, int& x1) 
     double lo = 1e300, hi = -1e300;
     if (!box) {
         extent_at(f, y + 0.5, lo, hi);
-        x0 = static_cast<int>(std::max(0.0, std::ceil(lo - 0.5)));
-        x1 = static_cast<int>(std::min(width - 1.0, std::floor(hi - 0.5)));
+        x0 = to_index(std::max(0.0, std::ceil(lo - 0.5)), width);
+        x1 = to_index(std::min(width - 1.0, std::floor(hi - 0.5)), width);
         return;
     }
     // The convex polygon's part in the strip [y, y + 1]: its corners there and its crossings of both lines.
@@ -96,8 +103,8 @@ void row_span(const Footprint& f, int y, int width, bool box, int& x0, int& x1) 
     extent_at(f, y + 1.0, lo, hi);
     for (const glm::dvec2& p : f.poly)
         if (p.y >= y && p.y <= y + 1.0) lo = std::min(lo, p.x), hi = std::max(hi, p.x);
-    x0 = static_cast<int>(std::max(0.0, std::floor(lo)));
-    x1 = static_cast<int>(std::min(width - 1.0, std::ceil(hi) - 1.0));
+    x0 = to_index(std::max(0.0, std::floor(lo)), width);
+    x1 = to_index(std::min(width - 1.0, std::ceil(hi) - 1.0), width);
 }
 
 void add_part(Coverage& cov, Footprint&& f) {

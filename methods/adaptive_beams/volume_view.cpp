@@ -2,6 +2,7 @@
 #include "volume_view.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -15,6 +16,9 @@ constexpr double kNoHit = std::numeric_limits<double>::infinity();
 // A smooth block's pixels lie within this fraction of the bilinear depth of its nodes (a fold or a
 // silhouette of one object inside the block refines it).
 constexpr double kDepthTolerance = 0.05;
+// Sub-rays made and integrated at once (32 bytes each: direction and end), and traced per batch.
+constexpr std::size_t kChunkRays = std::size_t{1} << 20;
+constexpr std::size_t kTraceBatch = 256;
 
 // The rays of one pass: per pixel `per_pixel` rays from `first[pixel]` (-1: the pixel is not in the pass),
 // and per row the sorted columns in the pass.
@@ -31,8 +35,8 @@ double gbuffer_depth(const CameraGBuffer& g, const CameraModel& cam, std::size_t
     return g.object[i] >= 0 ? glm::length(glm::dvec3(g.position[i]) - cam.position) : kNoHit;
 }
 
-// Mean over each pass pixel's rays of the sum over beams of their integrals: out[pixel] (pixels of the
-// pass only). Bands of rows are independent; each walks the beams in order.
+// Mean over each pass pixel's rays of the sum over beams of their integrals, added to out[pixel] (pixels
+// of the pass only; each beam's share is divided by the rays per pixel as it is added). Bands of rows are independent; each walks the beams in order.
 void evaluate(const Pass& pass, const std::vector<VolumeBeam>& beams, const CameraGBuffer& g, int samples,
               std::vector<double>& out, VolumeStats& stats) {
     const int W = g.width, H = g.height;
@@ -64,7 +68,7 @@ void evaluate(const Pass& pass, const std::vector<VolumeBeam>& beams, const Came
                             for (int q = 0; q < pass.per_pixel; ++q)
                                 sum += vb.beam->radiance(pass.dir[r + q], pass.s_max[r + q], samples, counters,
                                                          kVolumeNearDistance);
-                            out[i] += sum;
+                            out[i] += pass.per_pixel > 1 ? sum / pass.per_pixel : sum;
                             ++st.fill;
                             st.rays += pass.per_pixel;
                         }
@@ -79,9 +83,6 @@ void evaluate(const Pass& pass, const std::vector<VolumeBeam>& beams, const Came
         stats.rays += st.rays;
         stats.clamped += st.clamped;
     }
-    if (pass.per_pixel > 1)
-        for (std::size_t i = 0; i < out.size(); ++i)
-            if (pass.first[i] >= 0) out[i] /= pass.per_pixel;
 }
 
 // Node positions along one axis of n pixels: 0, step, 2 step, ... and n - 1.
@@ -100,7 +101,7 @@ void render_volume(const std::vector<VolumeBeam>& beams, const CameraModel& cam,
     const std::size_t np = static_cast<std::size_t>(W) * static_cast<std::size_t>(H);
     volume = Image(W, H);
     if (np == 0) return;
-    // A single row or column has no blocks: every pixel is a node.
+    // A single row or column has no blocks: every pixel is a node (and refined, below).
     const int step = W < 2 || H < 2 ? 1 : std::max(1, s.step), sub = std::max(1, s.subpixels);
     const std::vector<int> cx = lattice(W, step), cy = lattice(H, step);
 
@@ -121,6 +122,7 @@ void render_volume(const std::vector<VolumeBeam>& beams, const CameraModel& cam,
     evaluate(nodes, beams, g, s.samples, value, stats);
     if (step == 1 && sub == 1) {
         for (std::size_t i = 0; i < np; ++i) volume.pixels[i] = static_cast<float>(value[i]);
+        stats.refined += static_cast<std::int64_t>(np);   // every pixel evaluated in full
         return;
     }
 
@@ -161,7 +163,9 @@ void render_volume(const std::vector<VolumeBeam>& beams, const CameraModel& cam,
         b0 = nodes[static_cast<std::size_t>(k)] == x && k > 0 ? k - 1 : b1;
     };
     std::vector<std::uint8_t> refined(np, 0);
-    tbb::parallel_for(tbb::blocked_range<int>(0, H, kBandRows), [&](const tbb::blocked_range<int>& r) {
+    // A single row or column has no blocks: every pixel is refined.
+    if (bx_n == 0 || by_n == 0) std::fill(refined.begin(), refined.end(), std::uint8_t{1});
+    else tbb::parallel_for(tbb::blocked_range<int>(0, H, kBandRows), [&](const tbb::blocked_range<int>& r) {
         for (int y = r.begin(); y != r.end(); ++y) {
             int ya, yb;
             blocks_of(cy, y, ya, yb);
@@ -176,35 +180,57 @@ void render_volume(const std::vector<VolumeBeam>& beams, const CameraModel& cam,
         }
     });
 
-    // Refined pixels, each as the mean of sub x sub stratified rays (centre rays: nodes are done).
+    // Refined pixels, each as the mean of sub x sub stratified rays (centre rays: nodes are done). The
+    // rays are made, traced and integrated in bands of rows of at most kChunkRays rays (at least one row:
+    // 16 x 16 sub-rays of a 4,096-pixel row are 32 MB), so that memory stays bounded.
+    std::vector<double> full_value(np, 0.0);
+    std::vector<std::uint8_t> in_full(np, 0);
+    const std::size_t per_pixel = static_cast<std::size_t>(sub) * static_cast<std::size_t>(sub);
     Pass full;
     full.per_pixel = sub * sub;
     full.box = sub > 1;
     full.first.assign(np, -1);
     full.columns.resize(static_cast<std::size_t>(H));
-    for (int y = 0; y < H; ++y)
-        for (int x = 0; x < W; ++x) {
-            const std::size_t i = g.index(x, y);
-            if (!refined[i] || (sub == 1 && nodes.first[i] >= 0)) continue;
-            full.columns[static_cast<std::size_t>(y)].push_back(x);
-            full.first[i] = static_cast<int>(full.dir.size());
-            for (int a = 0; a < sub; ++a)
-                for (int b = 0; b < sub; ++b) {
-                    full.dir.push_back(cam.ray_direction(x + (b + 0.5) / sub, y + (a + 0.5) / sub));
-                    full.s_max.push_back(gbuffer_depth(g, cam, i));
-                }
+    int y_next = 0;
+    while (y_next < H) {
+        const int y_begin = y_next;
+        full.dir.clear();
+        full.s_max.clear();
+        for (; y_next < H && (y_next == y_begin || full.dir.size() + per_pixel * static_cast<std::size_t>(W) <= kChunkRays);
+             ++y_next) {
+            std::vector<int>& cols = full.columns[static_cast<std::size_t>(y_next)];
+            for (int x = 0; x < W; ++x) {
+                const std::size_t i = g.index(x, y_next);
+                if (!refined[i] || (sub == 1 && nodes.first[i] >= 0)) continue;
+                cols.push_back(x);
+                in_full[i] = 1;
+                full.first[i] = static_cast<int>(full.dir.size());
+                for (int a = 0; a < sub; ++a)
+                    for (int b = 0; b < sub; ++b) {
+                        full.dir.push_back(cam.ray_direction(x + (b + 0.5) / sub, y_next + (a + 0.5) / sub));
+                        full.s_max.push_back(gbuffer_depth(g, cam, i));
+                    }
+            }
         }
-    if (sub > 1 && tracer) {
-        std::vector<RayQuery> q(full.dir.size());
-        for (std::size_t k = 0; k < q.size(); ++k) q[k].origin = cam.position, q[k].dir = full.dir[k];
-        std::vector<Hit> hits(q.size());
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, q.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
-            tracer->intersect(q.data() + r.begin(), r.size(), hits.data() + r.begin());
-        });
-        for (std::size_t k = 0; k < q.size(); ++k) full.s_max[k] = hits[k].valid ? hits[k].t : kNoHit;
+        if (sub > 1 && tracer)
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, full.dir.size(), kTraceBatch),
+                              [&](const tbb::blocked_range<std::size_t>& r) {
+                std::array<RayQuery, kTraceBatch> q;
+                std::array<Hit, kTraceBatch> hits;
+                for (std::size_t k0 = r.begin(); k0 < r.end(); k0 += kTraceBatch) {
+                    const std::size_t n = std::min(kTraceBatch, r.end() - k0);
+                    for (std::size_t k = 0; k < n; ++k) q[k].origin = cam.position, q[k].dir = full.dir[k0 + k];
+                    tracer->intersect(q.data(), n, hits.data());
+                    for (std::size_t k = 0; k < n; ++k) full.s_max[k0 + k] = hits[k].valid ? hits[k].t : kNoHit;
+                }
+            });
+        if (!full.dir.empty()) evaluate(full, beams, g, s.samples, full_value, stats);
+        // The band's rows leave the pass: the next band's indices start again at 0.
+        for (int y = y_begin; y < y_next; ++y) {
+            for (int x : full.columns[static_cast<std::size_t>(y)]) full.first[g.index(x, y)] = -1;
+            full.columns[static_cast<std::size_t>(y)].clear();
+        }
     }
-    std::vector<double> full_value(np, 0.0);
-    evaluate(full, beams, g, s.samples, full_value, stats);
 
     // Compose: refined pixels, nodes, and the bilinear interpolation of the rest.
     tbb::parallel_for(tbb::blocked_range<int>(0, H, kBandRows), [&](const tbb::blocked_range<int>& r) {
@@ -213,7 +239,7 @@ void render_volume(const std::vector<VolumeBeam>& beams, const CameraModel& cam,
             for (int x = 0; x < W; ++x) {
                 const std::size_t i = g.index(x, y);
                 double v;
-                if (full.first[i] >= 0) v = full_value[i];
+                if (in_full[i]) v = full_value[i];
                 else if (nodes.first[i] >= 0) v = value[i];
                 else {
                     const int bx = std::min(x / step, bx_n - 1);

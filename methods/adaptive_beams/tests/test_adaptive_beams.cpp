@@ -8,6 +8,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <utility>
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
@@ -49,6 +50,15 @@ Scene murky_flat_water() {
     scene.camera.fov_y_deg = 50.0;
     scene.camera.width = 48;
     scene.camera.height = 36;
+    return scene;
+}
+
+// A shipped scene with a 64 x 48 camera and a bins x bins receiver (the volume view's tests).
+Scene small_view(const char* name, int bins) {
+    Scene scene = test_support::shipped_scene(name);
+    scene.camera.width = 64;
+    scene.camera.height = 48;
+    scene.receiver.width = scene.receiver.height = bins;
     return scene;
 }
 
@@ -319,10 +329,7 @@ TEST(AdaptiveBeams, RendersSphereFogAndPoolMurky) {
 TEST(AdaptiveBeams, CameraVolumeAgainstTheReference) {
     for (const char* name : {"sphere_fog", "pool_murky"}) {
         SCOPED_TRACE(name);
-        Scene scene = test_support::shipped_scene(name);
-        scene.camera.width = 64;
-        scene.camera.height = 48;
-        scene.receiver.width = scene.receiver.height = 64;
+        const Scene scene = small_view(name, 64);
         const test_support::TracedScene traced(scene);
         const CameraGBuffer gbuffer = build_camera_gbuffer(*traced.tracer, scene.camera);
         const ReferenceResult ref = traced.run(2'000'000, 2, &gbuffer);
@@ -355,10 +362,7 @@ TEST(AdaptiveBeams, CameraVolumeAgainstTheReference) {
 // 2 / 4 / 16 sub-rays per side; 42 of 44 edge pixels pass at 16 (the two others at |t| 8.3: thin slivers
 // of the cone that 256 stratified rays still resolve coarsely; an analytic coverage of the hull edges would).
 TEST(AdaptiveBeams, BoxFilteredVolumeAgreesWithTheReferenceAtTheConesEdges) {
-    Scene scene = test_support::shipped_scene("sphere_fog");
-    scene.camera.width = 64;
-    scene.camera.height = 48;
-    scene.receiver.width = scene.receiver.height = 32;
+    const Scene scene = small_view("sphere_fog", 32);
     const test_support::TracedScene traced(scene);
     const CameraGBuffer gbuffer = build_camera_gbuffer(*traced.tracer, scene.camera);
     const ReferenceResult ref = traced.run(8'000'000, 2, &gbuffer);
@@ -397,4 +401,19 @@ TEST(AdaptiveBeams, BoxFilteredVolumeAgreesWithTheReferenceAtTheConesEdges) {
     EXPECT_LT(pass_centre, edges / 2);
     EXPECT_GE(pass_box, 0.9 * edges);
     EXPECT_LT(t2_box, 0.01 * t2_centre);
+}
+
+// An image one pixel wide or tall has no blocks between nodes: every pixel is evaluated in full, with
+// the box filter, finite and counted as refined.
+TEST(AdaptiveBeams, VolumeViewOfOnePixelRowsAndColumns) {
+    for (const auto& [w, h] : {std::pair{1, 48}, std::pair{64, 1}, std::pair{1, 1}}) {
+        SCOPED_TRACE(std::to_string(w) + " x " + std::to_string(h));
+        Scene scene = small_view("sphere_fog", 16);
+        scene.camera.width = w;
+        scene.camera.height = h;
+        const Rendered r = render(scene, {{"volume_subpixels", "4"}}, 16);
+        ASSERT_EQ(r.out.camera_volume.pixels.size(), static_cast<std::size_t>(w * h));
+        for (const float v : r.out.camera_volume.pixels) EXPECT_TRUE(std::isfinite(v) && v >= 0.0f);
+        EXPECT_EQ(r.out.health.get("volume_refined"), w * h);
+    }
 }
