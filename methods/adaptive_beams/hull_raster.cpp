@@ -107,6 +107,13 @@ void row_span(const Footprint& f, int y, int width, bool box, int& x0, int& x1) 
     x1 = to_index(std::min(width - 1.0, std::ceil(hi) - 1.0), width);
 }
 
+// The six corners of the beam's slab y in [ya, yb]: its edges' points at both ends.
+std::array<glm::dvec3, 6> slab_corners(const Beam& b, double ya, double yb) {
+    std::array<glm::dvec3, 6> piece;
+    for (int i = 0; i < 3; ++i) piece[i] = b.point(i, ya), piece[3 + i] = b.point(i, yb);
+    return piece;
+}
+
 void add_part(Coverage& cov, Footprint&& f) {
     if (f.box_lo > f.box_hi) return;
     if (f.y_lo <= f.y_hi) {
@@ -138,9 +145,7 @@ Coverage coverage(const Beam& b, HullType hull, const std::array<glm::dvec3, 6>&
     cut[nc++] = b.y1;
     clipped = false;
     for (int k = 0; k + 1 < nc; ++k) {
-        std::array<glm::dvec3, 6> piece = corners;
-        if (nc > 2)
-            for (int i = 0; i < 3; ++i) piece[i] = b.point(i, cut[k]), piece[3 + i] = b.point(i, cut[k + 1]);
+        const std::array<glm::dvec3, 6> piece = nc > 2 ? slab_corners(b, cut[k], cut[k + 1]) : corners;
         bool c = false;
         Footprint f = footprint(piece, cam, height, c);
         clipped = clipped || c;
@@ -150,10 +155,8 @@ Coverage coverage(const Beam& b, HullType hull, const std::array<glm::dvec3, 6>&
 }
 
 Coverage slab_coverage(const Beam& b, double ya, double yb, const CameraModel& cam, int height, bool& clipped) {
-    std::array<glm::dvec3, 6> piece;
-    for (int i = 0; i < 3; ++i) piece[i] = b.point(i, ya), piece[3 + i] = b.point(i, yb);
     Coverage cov;
-    add_part(cov, footprint(piece, cam, height, clipped));
+    add_part(cov, footprint(slab_corners(b, ya, yb), cam, height, clipped));
     return cov;
 }
 

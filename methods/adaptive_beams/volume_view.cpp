@@ -85,6 +85,11 @@ void evaluate(const Pass& pass, const std::vector<VolumeBeam>& beams, const Came
     }
 }
 
+// Bilinear interpolation of a block's four corner values (x0 y0, x1 y0, x0 y1, x1 y1) at (tx, ty) in [0, 1]^2.
+double bilinear(const double (&c)[4], double tx, double ty) {
+    return (1 - ty) * ((1 - tx) * c[0] + tx * c[1]) + ty * ((1 - tx) * c[2] + tx * c[3]);
+}
+
 // Node positions along one axis of n pixels: 0, step, 2 step, ... and n - 1.
 std::vector<int> lattice(int n, int step) {
     std::vector<int> v;
@@ -147,9 +152,8 @@ void render_volume(const std::vector<VolumeBeam>& beams, const CameraModel& cam,
                         if (g.object[i] != object) smooth = false;
                         else if (object >= 0) {
                             const double tx = double(x - x0) / (x1 - x0), ty = double(y - y0) / (y1 - y0);
-                            const double bilinear = (1 - ty) * ((1 - tx) * d[0] + tx * d[1]) + ty * ((1 - tx) * d[2] + tx * d[3]);
                             const double depth = gbuffer_depth(g, cam, i);
-                            smooth = std::abs(depth - bilinear) <= kDepthTolerance * depth;
+                            smooth = std::abs(depth - bilinear(d, tx, ty)) <= kDepthTolerance * depth;
                         }
                     }
                 rough[static_cast<std::size_t>(by) * bx_n + bx] = smooth ? 0 : 1;
@@ -184,7 +188,8 @@ void render_volume(const std::vector<VolumeBeam>& beams, const CameraModel& cam,
     // rays are made, traced and integrated in bands of rows of at most kChunkRays rays (at least one row:
     // 16 x 16 sub-rays of a 4,096-pixel row are 32 MB), so that memory stays bounded.
     std::vector<double> full_value(np, 0.0);
-    std::vector<std::uint8_t> in_full(np, 0);
+    // With centre rays a refined node keeps its node value (the same ray).
+    auto in_full = [&](std::size_t i) { return refined[i] && (sub > 1 || nodes.first[i] < 0); };
     const std::size_t per_pixel = static_cast<std::size_t>(sub) * static_cast<std::size_t>(sub);
     Pass full;
     full.per_pixel = sub * sub;
@@ -201,14 +206,14 @@ void render_volume(const std::vector<VolumeBeam>& beams, const CameraModel& cam,
             std::vector<int>& cols = full.columns[static_cast<std::size_t>(y_next)];
             for (int x = 0; x < W; ++x) {
                 const std::size_t i = g.index(x, y_next);
-                if (!refined[i] || (sub == 1 && nodes.first[i] >= 0)) continue;
+                if (!in_full(i)) continue;
                 cols.push_back(x);
-                in_full[i] = 1;
                 full.first[i] = static_cast<int>(full.dir.size());
+                const double depth = gbuffer_depth(g, cam, i);   // the end of a ray when no tracer is given
                 for (int a = 0; a < sub; ++a)
                     for (int b = 0; b < sub; ++b) {
                         full.dir.push_back(cam.ray_direction(x + (b + 0.5) / sub, y_next + (a + 0.5) / sub));
-                        full.s_max.push_back(gbuffer_depth(g, cam, i));
+                        full.s_max.push_back(depth);
                     }
             }
         }
@@ -239,15 +244,15 @@ void render_volume(const std::vector<VolumeBeam>& beams, const CameraModel& cam,
             for (int x = 0; x < W; ++x) {
                 const std::size_t i = g.index(x, y);
                 double v;
-                if (in_full[i]) v = full_value[i];
+                if (in_full(i)) v = full_value[i];
                 else if (nodes.first[i] >= 0) v = value[i];
                 else {
                     const int bx = std::min(x / step, bx_n - 1);
                     const int x0 = cx[static_cast<std::size_t>(bx)], x1 = cx[static_cast<std::size_t>(bx) + 1];
                     const int y0 = cy[static_cast<std::size_t>(by)], y1 = cy[static_cast<std::size_t>(by) + 1];
-                    const double tx = double(x - x0) / (x1 - x0), ty = double(y - y0) / (y1 - y0);
-                    v = (1 - ty) * ((1 - tx) * value[g.index(x0, y0)] + tx * value[g.index(x1, y0)]) +
-                        ty * ((1 - tx) * value[g.index(x0, y1)] + tx * value[g.index(x1, y1)]);
+                    const double c[4] = {value[g.index(x0, y0)], value[g.index(x1, y0)], value[g.index(x0, y1)],
+                                         value[g.index(x1, y1)]};
+                    v = bilinear(c, double(x - x0) / (x1 - x0), double(y - y0) / (y1 - y0));
                 }
                 volume.pixels[i] = static_cast<float>(v);
             }
