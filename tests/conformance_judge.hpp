@@ -13,8 +13,10 @@
 //     1 % of the baseline's error, where bin sampling dominates);
 //   - outside it, the claim names its bound and lists a regime bound the frame does not meet; the error
 //     is measured and printed, not asserted.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <map>
 #include <memory>
 #include <string>
@@ -63,6 +65,27 @@ struct Rendered {
     AccuracyClaim claim;
 };
 
+// The parameter overrides CAUSTICS_CONFORMANCE_PARAMS sets ("key=value,key=value"), kept where `info` declares
+// the key: the suite then judges each method's claim at those parameters instead of its defaults (the claim
+// is a function of the parameters, so it must hold at any of them). Unset: the defaults.
+inline std::map<std::string, std::string> conformance_overrides(const MethodInfo& info) {
+    std::map<std::string, std::string> out;
+    const char* env = std::getenv("CAUSTICS_CONFORMANCE_PARAMS");
+    if (!env) return out;
+    const std::string text = env;
+    std::size_t at = 0;
+    while (at <= text.size()) {
+        const std::size_t comma = std::min(text.find(',', at), text.size());
+        const std::string item = text.substr(at, comma - at);
+        const std::size_t eq = item.find('=');
+        if (eq != std::string::npos)
+            for (const ParamSpec& p : info.params)
+                if (p.name == item.substr(0, eq)) out[p.name] = item.substr(eq + 1);
+        at = comma + 1;
+    }
+    return out;
+}
+
 // prepare, update and render frame 0 with `threads` worker threads; `renders` renders of the same frame.
 inline std::vector<Rendered> render_case(const MethodInfo& info, const std::map<std::string, std::string>& overrides,
                                          const Scene& scene, const FrameGeometry& frame, const ReceiverChart& chart,
@@ -81,7 +104,7 @@ inline std::vector<Rendered> render_case(const MethodInfo& info, const std::map<
 // The claim `info` states at its defaults on frame 0 of `scene` (prepare and update, no render); a refused
 // scene gives an outside claim with the refusal as its reason.
 inline AccuracyClaim claim_only(const MethodInfo& info, const Scene& scene) {
-    std::unique_ptr<Method> method = info.create(ParamSet::resolve(info.name, info.params, {}));
+    std::unique_ptr<Method> method = info.create(ParamSet::resolve(info.name, info.params, conformance_overrides(info)));
     const Capability cap = method->capabilities(scene);
     if (!cap.supported) return AccuracyClaim::outside("refused: " + cap.reason);
     const FrameGeometry frame = build_frame_geometry(scene, 0);
@@ -130,7 +153,8 @@ inline JudgedRow judge_case(const MethodInfo& info, const std::string& case_name
     row.method = info.name;
     row.test_case = case_name;
     row.flat_truth = flat_truth;
-    const ParamSet defaults = ParamSet::resolve(info.name, info.params, {});
+    const std::map<std::string, std::string> overrides = conformance_overrides(info);
+    const ParamSet defaults = ParamSet::resolve(info.name, info.params, overrides);
     {
         const std::unique_ptr<Method> probe = info.create(defaults);
         const Capability cap = probe->capabilities(scene);
@@ -152,7 +176,7 @@ inline JudgedRow judge_case(const MethodInfo& info, const std::string& case_name
     // What drawing no caustic scores: the flat interface's irradiance, or the best constant (solids).
     const Image baseline = make_baseline(flat_interface_baseline(frame, chart), truth.receiver).map;
 
-    const std::vector<Rendered> two = render_case(info, {}, scene, frame, chart, 2, 1);
+    const std::vector<Rendered> two = render_case(info, overrides, scene, frame, chart, 2, 1);
     const Image& m = two[0].out.receiver;
     EXPECT_EQ(m.width, chart.width());
     EXPECT_EQ(m.height, chart.height());
@@ -160,7 +184,7 @@ inline JudgedRow judge_case(const MethodInfo& info, const std::string& case_name
     EXPECT_EQ(nonfinite(m), 0) << "non-finite receiver values";
     if (full) {
         // Determinism: two renders with one thread (a fresh instance) against the render with two.
-        const std::vector<Rendered> one = render_case(info, {}, scene, frame, chart, 1, 2);
+        const std::vector<Rendered> one = render_case(info, overrides, scene, frame, chart, 1, 2);
         EXPECT_TRUE(identical(one[0].out.receiver, one[1].out.receiver)) << "a repeated render of the same frame differs";
         EXPECT_TRUE(identical(m, one[0].out.receiver)) << "the output differs between 1 and 2 threads";
     }
@@ -212,7 +236,9 @@ inline JudgedRow judge_case(const MethodInfo& info, const std::string& case_name
         if (p.name == "grid") grid_spec = &p;
     const long long grid_2x = 2 * defaults.get_int("grid");
     if (grid_spec && grid_2x <= grid_spec->max) {
-        const std::vector<Rendered> finer = render_case(info, {{"grid", std::to_string(grid_2x)}}, scene, frame, chart, 2, 1);
+        std::map<std::string, std::string> finer_params = overrides;
+        finer_params["grid"] = std::to_string(grid_2x);
+        const std::vector<Rendered> finer = render_case(info, finer_params, scene, frame, chart, 2, 1);
         const ErrorMetrics e2 = compare_images(finer[0].out.receiver, truth.receiver, !radiometric);
         row.error_2x = radiometric ? e2.nrmse : e2.nrmse_fit;
         if (!flat_truth && row.error > 0.01 * row.baseline) {

@@ -88,8 +88,10 @@ TEST_P(ConformanceDrawn, MeetsItsClaimOnDrawnHardCases) {
     const MethodInfo& info = require_method(GetParam());
     const std::uint64_t seed = test_support::conformance_seed();
     const int count = test_support::conformance_case_count();
-    std::printf("CAUSTICS_CONFORMANCE_SEED=%llu CAUSTICS_CONFORMANCE_CASES=%d (%s)\n", static_cast<unsigned long long>(seed),
-                count, info.name.c_str());
+    std::string params;
+    for (const auto& [k, v] : test_support::conformance_overrides(info)) params += (params.empty() ? "" : ",") + k + "=" + v;
+    std::printf("CAUSTICS_CONFORMANCE_SEED=%llu CAUSTICS_CONFORMANCE_CASES=%d CAUSTICS_CONFORMANCE_PARAMS=%s (%s)\n",
+                static_cast<unsigned long long>(seed), count, params.c_str(), info.name.c_str());
     std::vector<JudgedRow> rows;
     std::vector<DrawnCase> cases;
     double render_s = 0.0;

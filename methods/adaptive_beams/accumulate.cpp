@@ -2,6 +2,7 @@
 #include "accumulate.hpp"
 #include "hull_raster.hpp"
 #include "ray_beam.hpp"
+#include "surface_coverage.hpp"
 #include "volume_view.hpp"
 
 #include <algorithm>
@@ -68,11 +69,21 @@ void accumulate_camera(const BeamSet& set, const Scene& scene, const CameraGBuff
     std::vector<std::uint8_t> clipped(nb, 0), fallback(nb, 0);
     // Each volume beam seen from the camera, once (what its fragments share).
     std::vector<RayBeam> seen(want_volume ? nb : 0);
+    // The beams that end on one plane, box-filtered by coverage (surface_coverage.hpp); the point-in-beam
+    // pass takes the others.
+    Image plane_light;
+    std::vector<std::uint8_t> by_coverage(nb, 0);
+    if (surface && s.surface_coverage) {
+        plane_light = Image(g.width, g.height);
+        SurfaceCoverageStats cs;
+        by_coverage = deposit_plane_beams(set, scene, g, cam, plane_light, cs);
+        stats.coverage_beams += cs.beams;
+    }
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nb, 32), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t n = r.begin(); n != r.end(); ++n) {
             const Beam& b = set.beams[n];
             const bool vol = want_volume && b.medium == g.medium_object;
-            const bool surf = surface && (set.ends[n] & kEndsOnDiffuse);
+            const bool surf = surface && (set.ends[n] & kEndsOnDiffuse) && !by_coverage[n];
             if (!vol && !surf) continue;
             use[n] = static_cast<std::uint8_t>((vol ? 1 : 0) | (surf ? 2 : 0));
             bool c = false;
@@ -140,6 +151,8 @@ void accumulate_camera(const BeamSet& set, const Scene& scene, const CameraGBuff
             stats.clamped += clamp[static_cast<std::size_t>(band)];
         }
         low_pass(*surface, g, s.filter);
+        if (!plane_light.pixels.empty())
+            for (std::size_t i = 0; i < surface->pixels.size(); ++i) surface->pixels[i] += plane_light.pixels[i];
         stats.surface_ms += clock.ms();
     }
     if (want_volume) {

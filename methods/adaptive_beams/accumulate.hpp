@@ -2,7 +2,8 @@
 // Accumulating the beams (Sec. 5): each beam's bounding hull is scan-converted into the camera (pixel
 // centres inside the projection of the hull, near-clipped), and every pixel it touches gets the beam's
 // in-scattered radiance along its primary ray (Sec. 5.1, 5.2) and, where the pixel sees a diffuse surface,
-// the beam's irradiance there by point-in-beam (Sec. 5.3), low-pass filtered afterwards (Sec. 7). The
+// the beam's irradiance there by point-in-beam (Sec. 5.3), low-pass filtered afterwards (Sec. 7); beams
+// that end on one plane are instead split among the pixels by exact coverage (surface_coverage.hpp). The
 // receiver map takes the same point-in-beam test at stratified points of each bin.
 //
 // Parallel over bands of rows; each band walks the beams in their order, so the sums are the same for
@@ -22,7 +23,9 @@ struct AccumulateSettings {
     HullType hull = HullType::Tight;
     VolumeSettings volume;      // the volume view: Gauss points, node spacing, refinement, sub-rays
     int receiver_samples = 3;   // stratified point-in-beam samples per bin side on the receiver map
-    int filter = 1;             // camera surface caustics: tent filter radius [pixels], 0 = none
+    bool surface_coverage = true;   // camera surface caustics of beams ending on a plane by exact pixel coverage
+                                    // (surface_coverage.hpp); false: point-in-beam for all (the paper)
+    int filter = 1;             // camera surface caustics by point-in-beam: tent filter radius [pixels], 0 = none
     double end_tol = 0.05;      // a surface point may lie this fraction of a beam's length past its end
 };
 
@@ -34,6 +37,7 @@ struct AccumulateStats {
     std::int64_t prism_fallback = 0;  // prism hull not formed: the tight corners were used
     std::int64_t volume_rays = 0;     // (beam, ray) integrals of the volume view
     std::int64_t volume_refined = 0;  // volume view pixels evaluated in full (the others interpolated)
+    std::int64_t coverage_beams = 0;  // beams whose surface caustic was deposited by pixel coverage
     double hulls_ms = 0.0;            // the camera's stages: the beams' pixels (hull scan conversion),
     double surface_ms = 0.0;          // the surface caustics of the camera view,
     double volume_ms = 0.0;           // the volume view

@@ -8,8 +8,8 @@
 // second refraction on the way out (two-sided refraction, Sec. 6), up to the first diffuse surface or the
 // extrusion limit. A cell is split (Sec. 4.2) where its corners disagree (silhouette, another object,
 // total internal reflection), where depth or normal jump, where the light's hits at its edge midpoints
-// leave the bilinear beam (Sec. 6), where its beam converges strongly for its share of the light, and
-// where the beam is wide as seen from the camera.
+// leave the bilinear beam (Sec. 6), where its beam converges strongly for its share of the light,
+// where the beam is wide as seen from the camera, and where a beam passes a focus before it ends.
 #include <array>
 #include <cstdint>
 #include <memory>
@@ -48,8 +48,9 @@ struct GridSettings {
     double depth_threshold = 2.0;    // split: depth jump across a cell > this x its width
     double normal_threshold_deg = 15.0;   // split: corner normals further apart than this
     double focus_ratio = 1.0;        // split: the beam's end section is below 1 / (this 4^level) of its start
-    double deviation = 0.05;         // split: a midpoint's hit is off the beam's by more than this x the cell's end size
+    double deviation = 0.01;         // split: a midpoint's hit is off the beam's by more than this x the cell's end size
     double camera_angle = 0.05;      // split: the beam's width seen from the camera [rad] above this
+    bool fold_split = true;          // split: one of the cell's beams passes a focus before it ends
     double clamp_ratio = 1e-3;       // |A| >= this x the start area
     double energy_cutoff = 1e-3;     // extrusion ends (and faint beams are discarded) below this
 };
@@ -64,6 +65,7 @@ struct BeamSet {
     std::vector<Beam> beams;
     std::vector<std::uint8_t> ends;   // per beam: kEndsOnDiffuse | kEndsOnReceiver where an edge ends there, kAllOnReceiver where all three do,
                                       // kReceiverOrNothing where each ends there or at the extrusion limit
+    std::vector<int> end_object;      // per beam: the diffuse object all three edges end on, else -1
     GridStats stats;
 };
 

@@ -1,0 +1,91 @@
+// Box-filtered surface caustics of the beams that end on one diffuse plane (surface_coverage.hpp).
+#include "surface_coverage.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include <caustics/blocks/raster/raster.hpp>
+
+namespace caustics::adaptive_beams {
+namespace {
+
+struct PlaneBatch {
+    std::vector<glm::vec2> positions;
+    std::vector<glm::uvec3> triangles;
+    std::vector<float> values;
+};
+
+}  // namespace
+
+std::vector<std::uint8_t> deposit_plane_beams(const BeamSet& set, const Scene& scene, const CameraGBuffer& g,
+                                              const CameraModel& cam, Image& surface, SurfaceCoverageStats& stats) {
+    const std::size_t nb = set.beams.size();
+    std::vector<std::uint8_t> taken(nb, 0);
+    std::map<int, PlaneBatch> batches;
+    // Projected points further out than this many image sizes are left to the point pass (a section that
+    // reaches behind the camera's near region): the raster would clip them, but their screen area is no
+    // measure of the section's.
+    const double far_out = 16.0 * std::max(g.width, g.height);
+    for (std::size_t n = 0; n < nb; ++n) {
+        const int object = set.end_object[n];
+        if (object < 0 || !(set.ends[n] & kEndsOnDiffuse)) continue;
+        const Object& plane = scene.objects[static_cast<std::size_t>(object)];
+        if (plane.shape != ShapeType::Plane) continue;
+        const Beam& b = set.beams[n];
+        const glm::dvec3 np = glm::normalize(glm::cross(plane.u, plane.v));
+        const double sigma_t = medium_at(scene, b.medium).extinction();
+        glm::dvec3 ends[3];
+        double px[3], py[3], arriving = 0.0;
+        bool ok = true;
+        for (int i = 0; i < 3 && ok; ++i) {
+            const double stretch = glm::length(b.dp[i]);
+            ends[i] = b.point(i, b.ye[i]);
+            // An edge cut short by the energy cutoff does not end on the plane, whatever its path's end.
+            ok = std::abs(glm::dot(ends[i] - plane.center, np)) <= 1e-6 * (1.0 + (b.ye[i] - b.ys[i]) * stretch) &&
+                 cam.project(ends[i], px[i], py[i]) && std::abs(px[i]) < far_out && std::abs(py[i]) < far_out;
+            arriving += b.w[i] * std::exp(-sigma_t * (b.ye[i] - b.ys[i]) * stretch) / 3.0;
+        }
+        if (!ok) continue;
+        taken[n] = 1;
+        const glm::dvec3 centroid = (ends[0] + ends[1] + ends[2]) / 3.0;
+        const glm::dvec3 to_camera = cam.position - centroid;
+        const glm::dvec3 light = b.dp[0] + b.dp[1] + b.dp[2];
+        if (glm::dot(light, np) * glm::dot(to_camera, np) >= 0.0) {
+            ++stats.back_facing;   // lights the side the camera does not see: point-in-beam gives 0 there too
+            continue;
+        }
+        // Screen pixels per unit area of the plane: the projected triangle's area over the section's, or
+        // where the section is (nearly) a point, the pinhole's Jacobian cos(theta) / (t^2 Omega_pixel).
+        const double a_surface = 0.5 * glm::length(glm::cross(ends[1] - ends[0], ends[2] - ends[0]));
+        const double a_screen = 0.5 * std::abs((px[1] - px[0]) * (py[2] - py[0]) - (px[2] - px[0]) * (py[1] - py[0]));
+        const double t = glm::length(to_camera);
+        const int cx = std::clamp(static_cast<int>((px[0] + px[1] + px[2]) / 3.0), 0, g.width - 1);
+        const int cy = std::clamp(static_cast<int>((py[0] + py[1] + py[2]) / 3.0), 0, g.height - 1);
+        const double omega = cam.pixel_solid_angle(cx, cy);
+        const double scale = a_surface > 1e-9 * t * t * omega
+                                 ? a_screen / a_surface
+                                 : std::abs(glm::dot(to_camera, np)) / (t * t * t * omega);
+        PlaneBatch& batch = batches[object];
+        const auto base = static_cast<unsigned>(batch.positions.size());
+        for (int i = 0; i < 3; ++i) batch.positions.emplace_back(static_cast<float>(px[i]), static_cast<float>(py[i]));
+        batch.triangles.emplace_back(base, base + 1, base + 2);
+        batch.values.push_back(static_cast<float>(b.flux * arriving * scale));
+        ++stats.beams;
+    }
+    TriangleRaster raster;
+    RasterOptions options;
+    options.coverage = RasterCoverage::Area;
+    for (const auto& [object, batch] : batches) {
+        Image plane_light(g.width, g.height);
+        raster.draw({batch.positions, batch.triangles, batch.values, {}}, options, plane_light);
+        for (int y = 0; y < g.height; ++y)
+            for (int x = 0; x < g.width; ++x) {
+                const std::size_t i = g.index(x, y);
+                if (g.covered[i] && g.object[i] == object) surface.at(x, y) += plane_light.at(x, y);
+            }
+    }
+    return taken;
+}
+
+}  // namespace caustics::adaptive_beams

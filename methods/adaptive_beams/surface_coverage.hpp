@@ -1,0 +1,33 @@
+#pragma once
+// The camera view's surface caustics as each pixel's box average (docs/design.md section 3: a pixel holds
+// the mean irradiance over the part of the surface it sees), for the beams that end with all three edges on
+// one diffuse plane. Such a beam brings its flux Phi (times the transmittance of its edges) onto its end
+// section, the triangle of its edges' hits; its irradiance there is Phi / A_surface, and a pixel's mean
+// irradiance is that times the fraction of the pixel the projected triangle covers. The projected
+// triangles are split among the pixels by exact area coverage (blocks/raster), so a beam focused to less
+// than a pixel still brings its whole flux, where the paper's point-in-beam at pixel centres (Sec. 5.3)
+// hits or misses it and then low-pass filters the result (Sec. 7); the receiver map does the same on its
+// chart (accumulate.cpp). A pixel takes a triangle's light only where it sees the same plane (a plane
+// cannot hide part of itself, so the pixel sees the triangle's point); beams whose edges end on different
+// surfaces, on curved ones, or behind the camera are left to the point-in-beam pass.
+#include <cstdint>
+#include <vector>
+
+#include <caustics/frame/camera.hpp>
+#include <caustics/util/image.hpp>
+
+#include "light_grid.hpp"
+
+namespace caustics::adaptive_beams {
+
+struct SurfaceCoverageStats {
+    std::int64_t beams = 0;          // beams deposited by coverage
+    std::int64_t back_facing = 0;    // beams whose light reaches the side of the plane the camera does not see
+};
+
+// Adds the box-filtered irradiance of the beams it takes to `surface` (covered pixels of their plane) and
+// returns, per beam, 1 where it took the beam (the point-in-beam pass must then skip it).
+std::vector<std::uint8_t> deposit_plane_beams(const BeamSet& set, const Scene& scene, const CameraGBuffer& g,
+                                              const CameraModel& cam, Image& surface, SurfaceCoverageStats& stats);
+
+}  // namespace caustics::adaptive_beams
