@@ -162,241 +162,225 @@ double LightGrid::triangle_flux(const glm::dvec2& a, const glm::dvec2& b, const 
     return light.intensity * 2.0 * std::atan2(num, den);
 }
 
-BeamSet LightGrid::generate() const {
-    BeamSet out;
-    GridStats& st = out.stats;
-    const Scene& scene = *frame_.scene;
-    const glm::dvec3 camera = scene.camera.position;
+// The traced points of the finest grid's lattice, each traced once.
+struct LightGrid::Lattice {
     std::unordered_map<std::uint64_t, int> index;
     std::vector<LightPath> paths;
-    const int max_level = s_.adaptive ? s_.iterations : 0;
-    const int s0 = res_ / s_.grid;
-    std::vector<Cell> cells;
-    for (int j = 0; j < s_.grid; ++j)
-        for (int i = 0; i < s_.grid; ++i) cells.push_back({0, i * s0, j * s0});
-    std::vector<Cell> leaves;
-    const double cos_normal = std::cos(s_.normal_threshold_deg * M_PI / 180.0);
+    const LightPath& at(int i, int j) const { return paths[static_cast<std::size_t>(index.at(key(i, j)))]; }
+};
 
-    // The beams of one triangle of lattice corners (one per segment of their common path).
-    struct TriBeams {
-        std::vector<Beam> beams;
-        std::vector<std::uint8_t> ends;
-        std::vector<int> end_object;
-        std::int64_t tir = 0, energy = 0, degenerate = 0, lost = 0, flipped = 0;
-        double min_ratio = 1e300, max_view_angle = 0.0;
-        bool folded = false;   // a beam passes a focus before it ends
-    };
-    // The beams of three light rays through lattice points c (one beam per segment of their path).
-    auto emit = [&](const glm::dvec2 (&c)[3], const LightPath* const (&p)[3], TriBeams& tb) {
-        if (!same_structure(*p[0], *p[1]) || !same_structure(*p[0], *p[2])) { ++tb.lost; return; }
-        if (p[0]->status == LightPath::Lost) ++tb.lost;
-        const double flux = triangle_flux(c[0], c[1], c[2]);
-        for (int k = 0; k < p[0]->segments; ++k) {
-            const std::array<EdgeRay, 3> edges{p[0]->seg[k], p[1]->seg[k], p[2]->seg[k]};
-            Beam b;
-            if (make_beam(edges, flux, p[0]->medium[k], s_.clamp_ratio, b) != BeamStatus::Ok) { ++tb.degenerate; continue; }
-            const MediumCoefficients mc = medium_at(scene, b.medium);
-            {
-                // Concentration where the beam ends (the receiver): its end section against its start.
-                const double ys = (b.ys[0] + b.ys[1] + b.ys[2]) / 3.0, ye = (b.ye[0] + b.ye[1] + b.ye[2]) / 3.0;
-                tb.min_ratio = std::min(tb.min_ratio, std::abs(b.area(ye)) / std::abs(b.area(ys)));
-            }
-            if (!cut_by_energy(b, mc.extinction(), s_.energy_cutoff)) { ++tb.energy; continue; }
-            tb.flipped += b.flipped;
-            tb.folded = tb.folded || b.flipped;
-            // The oracle's camera term: the closest point to the camera on the central ray (Sec. 4.2).
-            const glm::dvec3 start = (edges[0].start + edges[1].start + edges[2].start) / 3.0;
-            const glm::dvec3 dir = glm::normalize(edges[0].dir + edges[1].dir + edges[2].dir);
-            const double len = (edges[0].length + edges[1].length + edges[2].length) / 3.0;
-            const double t = std::clamp(glm::dot(camera - start, dir), 0.0, len);
-            const glm::dvec3 x = start + t * dir;
-            const double y = glm::dot(x - b.c, b.n);
-            const double width = std::sqrt(2.0 * std::max(std::abs(b.area(y)), b.a_min));
-            tb.max_view_angle = std::max(tb.max_view_angle, width / std::max(glm::length(x - camera), 1e-9));
-            tb.beams.push_back(b);
-            std::uint8_t ends = kAllOnReceiver | kReceiverOrNothing;
-            for (const LightPath* q : p) {
-                const int e = q->end_object[static_cast<std::size_t>(k)];
-                if (e != scene.receiver.object_index) ends &= static_cast<std::uint8_t>(~kAllOnReceiver);
-                if (e != scene.receiver.object_index && e != -1) ends &= static_cast<std::uint8_t>(~kReceiverOrNothing);
-            }
-            for (const LightPath* q : p) {
-                const int e = q->end_object[static_cast<std::size_t>(k)];
-                if (e >= 0 && !scene.objects[static_cast<std::size_t>(e)].material.is_specular()) ends |= kEndsOnDiffuse;
-                if (e >= 0 && e == scene.receiver.object_index) ends |= kEndsOnReceiver;
-            }
-            tb.ends.push_back(ends);
-            const int e0 = p[0]->end_object[static_cast<std::size_t>(k)];
-            const bool one = e0 >= 0 && e0 == p[1]->end_object[static_cast<std::size_t>(k)] &&
-                             e0 == p[2]->end_object[static_cast<std::size_t>(k)] &&
-                             !scene.objects[static_cast<std::size_t>(e0)].material.is_specular();
-            tb.end_object.push_back(one ? e0 : -1);
+// The beams of one triangle of lattice points (one per segment of their common path), what was dropped,
+// and what the oracle weighs.
+struct LightGrid::TriBeams {
+    std::vector<Beam> beams;
+    std::vector<std::uint8_t> ends;
+    std::vector<int> end_object;
+    std::int64_t tir = 0, energy = 0, degenerate = 0, lost = 0, flipped = 0;
+    double min_ratio = 1e300, max_view_angle = 0.0;
+    bool folded = false;   // a beam passes a focus before it ends
+};
+
+// The beams of three light rays through lattice points c (one beam per segment of their path).
+void LightGrid::emit(const glm::dvec2 (&c)[3], const LightPath* const (&p)[3], TriBeams& tb) const {
+    const Scene& scene = *frame_.scene;
+    const glm::dvec3 camera = scene.camera.position;
+    if (!same_structure(*p[0], *p[1]) || !same_structure(*p[0], *p[2])) { ++tb.lost; return; }
+    if (p[0]->status == LightPath::Lost) ++tb.lost;
+    const double flux = triangle_flux(c[0], c[1], c[2]);
+    for (int k = 0; k < p[0]->segments; ++k) {
+        const std::array<EdgeRay, 3> edges{p[0]->seg[k], p[1]->seg[k], p[2]->seg[k]};
+        Beam b;
+        if (make_beam(edges, flux, p[0]->medium[k], s_.clamp_ratio, b) != BeamStatus::Ok) { ++tb.degenerate; continue; }
+        const MediumCoefficients mc = medium_at(scene, b.medium);
+        {
+            // Concentration where the beam ends (the receiver): its end section against its start.
+            const double ys = (b.ys[0] + b.ys[1] + b.ys[2]) / 3.0, ye = (b.ye[0] + b.ye[1] + b.ye[2]) / 3.0;
+            tb.min_ratio = std::min(tb.min_ratio, std::abs(b.area(ye)) / std::abs(b.area(ys)));
         }
-    };
-    // Where a triangle's corners straddle a silhouette (some rays miss the specular object, Sec. 4.1:
-    // "invalid triangles crossing the silhouettes ... are omitted"), `clip` bisects its edges between
-    // the rays that hit and those that miss (10 steps: 1/1024 of the edge) and keeps the part that hits,
-    // so the light at the border of a surface is not lost with whole cells.
-    auto make_triangle = [&](const glm::ivec2 (&ci)[3], TriBeams& tb, bool clip) {
-        const LightPath* p[3];
-        glm::dvec2 c[3];
-        for (int k = 0; k < 3; ++k) {
-            p[k] = &paths[static_cast<std::size_t>(index.at(key(ci[k].x, ci[k].y)))];
-            c[k] = glm::dvec2(ci[k]);
-        }
-        int tir = 0, missed = 0;
+        if (!cut_by_energy(b, mc.extinction(), s_.energy_cutoff)) { ++tb.energy; continue; }
+        tb.flipped += b.flipped;
+        tb.folded = tb.folded || b.flipped;
+        // The oracle's camera term: the closest point to the camera on the central ray (Sec. 4.2).
+        const glm::dvec3 start = (edges[0].start + edges[1].start + edges[2].start) / 3.0;
+        const glm::dvec3 dir = glm::normalize(edges[0].dir + edges[1].dir + edges[2].dir);
+        const double len = (edges[0].length + edges[1].length + edges[2].length) / 3.0;
+        const double t = std::clamp(glm::dot(camera - start, dir), 0.0, len);
+        const glm::dvec3 x = start + t * dir;
+        const double y = glm::dot(x - b.c, b.n);
+        const double width = std::sqrt(2.0 * std::max(std::abs(b.area(y)), b.a_min));
+        tb.max_view_angle = std::max(tb.max_view_angle, width / std::max(glm::length(x - camera), 1e-9));
+        tb.beams.push_back(b);
+        std::uint8_t ends = kAllOnReceiver | kReceiverOrNothing;
         for (const LightPath* q : p) {
-            tir += q->status == LightPath::TotalInternalReflection;
-            missed += q->status == LightPath::Missed;
+            const int e = q->end_object[static_cast<std::size_t>(k)];
+            if (e != scene.receiver.object_index) ends &= static_cast<std::uint8_t>(~kAllOnReceiver);
+            if (e != scene.receiver.object_index && e != -1) ends &= static_cast<std::uint8_t>(~kReceiverOrNothing);
         }
-        if (missed == 3) return;
-        if (tir > 0) { ++tb.tir; return; }
-        if (missed == 0) {
-            emit(c, p, tb);
-            return;
+        for (const LightPath* q : p) {
+            const int e = q->end_object[static_cast<std::size_t>(k)];
+            if (e >= 0 && !scene.objects[static_cast<std::size_t>(e)].material.is_specular()) ends |= kEndsOnDiffuse;
+            if (e >= 0 && e == scene.receiver.object_index) ends |= kEndsOnReceiver;
         }
-        int valid[2], nv = 0, gone[2], ng = 0;
-        for (int k = 0; k < 3; ++k) (p[k]->status == LightPath::Missed ? gone[ng++] : valid[nv++]) = k;
-        if (!clip || (nv == 2 && !same_structure(*p[valid[0]], *p[valid[1]]))) { ++tb.lost; return; }
-        const LightPath& ref = *p[valid[0]];
-        auto cut = [&](int a, int b, LightPath& out) {
-            glm::dvec2 lo = c[a], hi = c[b];
-            out = *p[a];
-            for (int it = 0; it < 10; ++it) {
-                const glm::dvec2 mid = 0.5 * (lo + hi);
-                LightPath m = trace(mid.x, mid.y);
-                if (m.status != LightPath::Missed && same_structure(m, ref)) lo = mid, out = m;
-                else hi = mid;
-            }
-            return lo;
-        };
-        if (nv == 1) {
-            const int a = valid[0];
-            LightPath pb, pc;
-            const glm::dvec2 qb = cut(a, gone[0], pb), qc = cut(a, gone[1], pc);
-            const glm::dvec2 t[3] = {c[a], qb, qc};
-            const LightPath* tp[3] = {p[a], &pb, &pc};
-            emit(t, tp, tb);
-        } else {
-            const int a = valid[0], b = valid[1], g = gone[0];
-            LightPath pa, pb;
-            const glm::dvec2 qa = cut(a, g, pa), qb = cut(b, g, pb);
-            const glm::dvec2 t0[3] = {c[a], c[b], qb}, t1[3] = {c[a], qb, qa};
-            const LightPath* p0[3] = {p[a], p[b], &pb};
-            const LightPath* p1[3] = {p[a], &pb, &pa};
-            emit(t0, p0, tb);
-            emit(t1, p1, tb);
-        }
-    };
-
-    for (int level = 0; level <= max_level && !cells.empty(); ++level) {
-        const int size = s0 >> level;
-        // Trace the corners not traced yet, in lattice order (the result does not depend on the threads).
-        std::vector<std::uint64_t> need;
-        // Cells that may split also need their edge midpoints and centre (the deviation test).
-        const int step = level < max_level ? 1 : 2;
-        for (const Cell& c : cells)
-            for (int dj = 0; dj <= 2; dj += step)
-                for (int di = 0; di <= 2; di += step) {
-                    const std::uint64_t k = key(c.i + di * size / 2, c.j + dj * size / 2);
-                    if (!index.count(k)) need.push_back(k);
-                }
-        std::sort(need.begin(), need.end());
-        need.erase(std::unique(need.begin(), need.end()), need.end());
-        const std::size_t first = paths.size();
-        paths.resize(first + need.size());
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, need.size(), 64), [&](const tbb::blocked_range<std::size_t>& r) {
-            for (std::size_t n = r.begin(); n != r.end(); ++n)
-                paths[first + n] = trace(static_cast<int>(need[n] >> 32), static_cast<int>(need[n] & 0xffffffffu));
-        });
-        for (std::size_t n = 0; n < need.size(); ++n) index.emplace(need[n], static_cast<int>(first + n));
-
-        // The oracle (Sec. 4.2), cell by cell: 0 drop, 1 leaf, 2 split.
-        std::vector<std::uint8_t> action(cells.size(), 1);
-        const bool can_split = level < max_level;
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cells.size(), 16), [&](const tbb::blocked_range<std::size_t>& r) {
-            for (std::size_t n = r.begin(); n != r.end(); ++n) {
-                const Cell& c = cells[n];
-                const glm::ivec2 q[4] = {{c.i, c.j}, {c.i + size, c.j}, {c.i + size, c.j + size}, {c.i, c.j + size}};
-                const LightPath* p[4];
-                int missed = 0;
-                for (int k = 0; k < 4; ++k) {
-                    p[k] = &paths[static_cast<std::size_t>(index.at(key(q[k].x, q[k].y)))];
-                    missed += p[k]->status == LightPath::Missed;
-                }
-                if (missed == 4) { action[n] = 0; continue; }
-                if (!can_split) continue;
-                bool split = false;
-                for (int k = 1; k < 4 && !split; ++k) split = !same_structure(*p[0], *p[k]);
-                if (!split) {
-                    // Depth and normal discontinuities at the beam corners' origins.
-                    double dmin = 1e300, dmax = -1e300, cmin = 1.0;
-                    for (int a = 0; a < 4; ++a) {
-                        dmin = std::min(dmin, p[a]->depth), dmax = std::max(dmax, p[a]->depth);
-                        for (int b = a + 1; b < 4; ++b) cmin = std::min(cmin, glm::dot(p[a]->normal, p[b]->normal));
-                    }
-                    double width = size * (proj_.x1 - proj_.x0) / res_;
-                    if (proj_.type == ProjectionType::Perspective) width *= 0.5 * (dmin + dmax);
-                    split = dmax - dmin > s_.depth_threshold * width || cmin < cos_normal;
-                }
-                if (!split && p[0]->segments > 0) {
-                    // The light's hits at the cell's edge midpoints and centre against the bilinear beam's
-                    // (Sec. 6: "the difference of photon hits at beam edges"): where the ray map is not
-                    // linear over the cell, one beam misplaces the caustic.
-                    const int h = size / 2;
-                    const glm::ivec2 mid[5] = {{c.i + h, c.j}, {c.i + size, c.j + h}, {c.i + h, c.j + size}, {c.i, c.j + h},
-                                               {c.i + h, c.j + h}};
-                    const int last = p[0]->segments - 1;
-                    auto end = [&](const LightPath& lp) {
-                        const EdgeRay& e = lp.seg[static_cast<std::size_t>(last)];
-                        return e.start + e.length * e.dir;
-                    };
-                    const glm::dvec3 e0 = end(*p[0]), e1 = end(*p[1]), e2 = end(*p[2]), e3 = end(*p[3]);
-                    const glm::dvec3 predicted[5] = {0.5 * (e0 + e1), 0.5 * (e1 + e2), 0.5 * (e2 + e3), 0.5 * (e3 + e0),
-                                                     0.25 * (e0 + e1 + e2 + e3)};
-                    const double extent = std::max(glm::length(e2 - e0), glm::length(e3 - e1));
-                    for (int k = 0; k < 5 && !split; ++k) {
-                        const LightPath& m = paths[static_cast<std::size_t>(index.at(key(mid[k].x, mid[k].y)))];
-                        if (!same_structure(*p[0], m)) split = true;
-                        else split = glm::length(end(m) - predicted[k]) > s_.deviation * extent;
-                    }
-                }
-                if (!split) {
-                    // Convergent beams by energy (a beam at level L carries 4^-L of an initial cell's light:
-                    // its concentration where it ends is weighed against focus_ratio 4^L; the minimum over
-                    // its length would split every beam that passes a focus, to the last level), beams
-                    // wide as seen from the camera, and (fold_split) beams that pass a focus before they end:
-                    // past the first focus a fold of the ray map lies inside them, and a beam's one density
-                    // smears its 1/sqrt peak over the whole section (drawn sine cases at 1-1.5 x the first
-                    // focus: 0.11 without this test at a finest grid of 256, 0.088 with it).
-                    TriBeams tb;
-                    const glm::ivec2 t0[3] = {q[0], q[1], q[2]}, t1[3] = {q[0], q[2], q[3]};
-                    make_triangle(t0, tb, false);
-                    make_triangle(t1, tb, false);
-                    split = tb.min_ratio * s_.focus_ratio * std::ldexp(1.0, 2 * level) < 1.0 ||
-                            tb.max_view_angle > s_.camera_angle || (s_.fold_split && tb.folded);
-                }
-                action[n] = split ? 2 : 1;
-            }
-        });
-        std::vector<Cell> next;
-        for (std::size_t n = 0; n < cells.size(); ++n) {
-            if (action[n] == 1) leaves.push_back(cells[n]);
-            if (action[n] != 2) continue;
-            ++st.beams_split;
-            const Cell& c = cells[n];
-            const int h = size / 2;
-            for (int dj = 0; dj <= 1; ++dj)
-                for (int di = 0; di <= 1; ++di) next.push_back({level + 1, c.i + di * h, c.j + dj * h});
-        }
-        cells.swap(next);
+        tb.ends.push_back(ends);
+        const int e0 = p[0]->end_object[static_cast<std::size_t>(k)];
+        const bool one = e0 >= 0 && e0 == p[1]->end_object[static_cast<std::size_t>(k)] &&
+                         e0 == p[2]->end_object[static_cast<std::size_t>(k)] &&
+                         !scene.objects[static_cast<std::size_t>(e0)].material.is_specular();
+        tb.end_object.push_back(one ? e0 : -1);
     }
+}
 
-    // The leaves' beams, in leaf order. A leaf whose neighbour was refined further has that neighbour's
-    // corners on its side (T-junctions): it is then cut into a fan around its centre through every such
-    // corner, so that neighbouring beams share their edge rays and the beams tile the light without
-    // cracks or overlaps (otherwise the bilinear sides of a coarse beam and of its finer neighbours part
-    // where the ray map bends, and light is lost or counted twice).
+// Where a triangle's corners straddle a silhouette (some rays miss the specular object, Sec. 4.1:
+// "invalid triangles crossing the silhouettes ... are omitted"), `clip` bisects its edges between
+// the rays that hit and those that miss (10 steps: 1/1024 of the edge) and keeps the part that hits,
+// so the light at the border of a surface is not lost with whole cells.
+void LightGrid::make_triangle(const Lattice& lattice, const glm::ivec2 (&ci)[3], TriBeams& tb, bool clip) const {
+    const LightPath* p[3];
+    glm::dvec2 c[3];
+    for (int k = 0; k < 3; ++k) {
+        p[k] = &lattice.at(ci[k].x, ci[k].y);
+        c[k] = glm::dvec2(ci[k]);
+    }
+    int tir = 0, missed = 0;
+    for (const LightPath* q : p) {
+        tir += q->status == LightPath::TotalInternalReflection;
+        missed += q->status == LightPath::Missed;
+    }
+    if (missed == 3) return;
+    if (tir > 0) { ++tb.tir; return; }
+    if (missed == 0) {
+        emit(c, p, tb);
+        return;
+    }
+    int valid[2], nv = 0, gone[2], ng = 0;
+    for (int k = 0; k < 3; ++k) (p[k]->status == LightPath::Missed ? gone[ng++] : valid[nv++]) = k;
+    if (!clip || (nv == 2 && !same_structure(*p[valid[0]], *p[valid[1]]))) { ++tb.lost; return; }
+    const LightPath& ref = *p[valid[0]];
+    auto cut = [&](int a, int b, LightPath& out) {
+        glm::dvec2 lo = c[a], hi = c[b];
+        out = *p[a];
+        for (int it = 0; it < 10; ++it) {
+            const glm::dvec2 mid = 0.5 * (lo + hi);
+            LightPath m = trace(mid.x, mid.y);
+            if (m.status != LightPath::Missed && same_structure(m, ref)) lo = mid, out = m;
+            else hi = mid;
+        }
+        return lo;
+    };
+    if (nv == 1) {
+        const int a = valid[0];
+        LightPath pb, pc;
+        const glm::dvec2 qb = cut(a, gone[0], pb), qc = cut(a, gone[1], pc);
+        const glm::dvec2 t[3] = {c[a], qb, qc};
+        const LightPath* tp[3] = {p[a], &pb, &pc};
+        emit(t, tp, tb);
+    } else {
+        const int a = valid[0], b = valid[1], g = gone[0];
+        LightPath pa, pb;
+        const glm::dvec2 qa = cut(a, g, pa), qb = cut(b, g, pb);
+        const glm::dvec2 t0[3] = {c[a], c[b], qb}, t1[3] = {c[a], qb, qa};
+        const LightPath* p0[3] = {p[a], p[b], &pb};
+        const LightPath* p1[3] = {p[a], &pb, &pa};
+        emit(t0, p0, tb);
+        emit(t1, p1, tb);
+    }
+}
+
+// Traces the lattice points `cells` need that are not traced yet (each cell's corners; with step 1 also its
+// edge midpoints and centre, for the deviation test), in lattice order, so that the result does not depend
+// on the threads.
+void LightGrid::trace_points(Lattice& lattice, const std::vector<Cell>& cells, int size, int step) const {
+    std::vector<std::uint64_t> need;
+    for (const Cell& c : cells)
+        for (int dj = 0; dj <= 2; dj += step)
+            for (int di = 0; di <= 2; di += step) {
+                const std::uint64_t k = key(c.i + di * size / 2, c.j + dj * size / 2);
+                if (!lattice.index.count(k)) need.push_back(k);
+            }
+    std::sort(need.begin(), need.end());
+    need.erase(std::unique(need.begin(), need.end()), need.end());
+    const std::size_t first = lattice.paths.size();
+    lattice.paths.resize(first + need.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, need.size(), 64), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t n = r.begin(); n != r.end(); ++n)
+            lattice.paths[first + n] = trace(static_cast<int>(need[n] >> 32), static_cast<int>(need[n] & 0xffffffffu));
+    });
+    for (std::size_t n = 0; n < need.size(); ++n) lattice.index.emplace(need[n], static_cast<int>(first + n));
+}
+
+// The oracle (Sec. 4.2) on one cell of `size` lattice steps at refinement `level`: 0 drop (no light ray
+// through its corners meets a specular surface), 1 leaf, 2 split.
+std::uint8_t LightGrid::oracle(const Lattice& lattice, const Cell& c, int size, int level, bool can_split) const {
+    const double cos_normal = std::cos(s_.normal_threshold_deg * M_PI / 180.0);
+    const glm::ivec2 q[4] = {{c.i, c.j}, {c.i + size, c.j}, {c.i + size, c.j + size}, {c.i, c.j + size}};
+    const LightPath* p[4];
+    int missed = 0;
+    for (int k = 0; k < 4; ++k) {
+        p[k] = &lattice.at(q[k].x, q[k].y);
+        missed += p[k]->status == LightPath::Missed;
+    }
+    if (missed == 4) return 0;
+    if (!can_split) return 1;
+    bool split = false;
+    for (int k = 1; k < 4 && !split; ++k) split = !same_structure(*p[0], *p[k]);
+    if (!split) {
+        // Depth and normal discontinuities at the beam corners' origins.
+        double dmin = 1e300, dmax = -1e300, cmin = 1.0;
+        for (int a = 0; a < 4; ++a) {
+            dmin = std::min(dmin, p[a]->depth), dmax = std::max(dmax, p[a]->depth);
+            for (int b = a + 1; b < 4; ++b) cmin = std::min(cmin, glm::dot(p[a]->normal, p[b]->normal));
+        }
+        double width = size * (proj_.x1 - proj_.x0) / res_;
+        if (proj_.type == ProjectionType::Perspective) width *= 0.5 * (dmin + dmax);
+        split = dmax - dmin > s_.depth_threshold * width || cmin < cos_normal;
+    }
+    if (!split && p[0]->segments > 0) {
+        // The light's hits at the cell's edge midpoints and centre against the bilinear beam's
+        // (Sec. 6: "the difference of photon hits at beam edges"): where the ray map is not
+        // linear over the cell, one beam misplaces the caustic.
+        const int h = size / 2;
+        const glm::ivec2 mid[5] = {{c.i + h, c.j}, {c.i + size, c.j + h}, {c.i + h, c.j + size}, {c.i, c.j + h},
+                                   {c.i + h, c.j + h}};
+        const int last = p[0]->segments - 1;
+        auto end = [&](const LightPath& lp) {
+            const EdgeRay& e = lp.seg[static_cast<std::size_t>(last)];
+            return e.start + e.length * e.dir;
+        };
+        const glm::dvec3 e0 = end(*p[0]), e1 = end(*p[1]), e2 = end(*p[2]), e3 = end(*p[3]);
+        const glm::dvec3 predicted[5] = {0.5 * (e0 + e1), 0.5 * (e1 + e2), 0.5 * (e2 + e3), 0.5 * (e3 + e0),
+                                         0.25 * (e0 + e1 + e2 + e3)};
+        const double extent = std::max(glm::length(e2 - e0), glm::length(e3 - e1));
+        for (int k = 0; k < 5 && !split; ++k) {
+            const LightPath& m = lattice.at(mid[k].x, mid[k].y);
+            if (!same_structure(*p[0], m)) split = true;
+            else split = glm::length(end(m) - predicted[k]) > s_.deviation * extent;
+        }
+    }
+    if (!split) {
+        // Convergent beams by energy (a beam at level L carries 4^-L of an initial cell's light:
+        // its concentration where it ends is weighed against focus_ratio 4^L; the minimum over
+        // its length would split every beam that passes a focus, to the last level), beams
+        // wide as seen from the camera, and (fold_split) beams that pass a focus before they end:
+        // past the first focus a fold of the ray map lies inside them, and a beam's one density
+        // smears its 1/sqrt peak over the whole section (drawn sine cases at 1-1.5 x the first
+        // focus: 0.11 without this test at a finest grid of 256, 0.088 with it).
+        TriBeams tb;
+        const glm::ivec2 t0[3] = {q[0], q[1], q[2]}, t1[3] = {q[0], q[2], q[3]};
+        make_triangle(lattice, t0, tb, false);
+        make_triangle(lattice, t1, tb, false);
+        split = tb.min_ratio * s_.focus_ratio * std::ldexp(1.0, 2 * level) < 1.0 ||
+                tb.max_view_angle > s_.camera_angle || (s_.fold_split && tb.folded);
+    }
+    return split ? 2 : 1;
+}
+
+// The leaves' beams, in leaf order. A leaf whose neighbour was refined further has that neighbour's
+// corners on its side (T-junctions): it is then cut into a fan around its centre through every such
+// corner, so that neighbouring beams share their edge rays and the beams tile the light without
+// cracks or overlaps (otherwise the bilinear sides of a coarse beam and of its finer neighbours part
+// where the ray map bends, and light is lost or counted twice).
+void LightGrid::leaf_beams(const Lattice& lattice, const std::vector<Cell>& leaves, int s0, BeamSet& out) const {
+    GridStats& st = out.stats;
     std::unordered_map<std::uint64_t, char> corner;
     for (const Cell& c : leaves) {
         const int size = s0 >> c.level;
@@ -420,14 +404,14 @@ BeamSet LightGrid::generate() const {
             }
             if (ring.size() == 4) {
                 const glm::ivec2 t0[3] = {q[0], q[1], q[2]}, t1[3] = {q[0], q[2], q[3]};
-                make_triangle(t0, per[n], true);
-                make_triangle(t1, per[n], true);
+                make_triangle(lattice, t0, per[n], true);
+                make_triangle(lattice, t1, per[n], true);
                 continue;
             }
             const glm::ivec2 centre{c.i + size / 2, c.j + size / 2};   // traced: the leaf could have split
             for (std::size_t k = 0; k < ring.size(); ++k) {
                 const glm::ivec2 t[3] = {centre, ring[k], ring[(k + 1) % ring.size()]};
-                make_triangle(t, per[n], true);
+                make_triangle(lattice, t, per[n], true);
             }
         }
     });
@@ -443,6 +427,38 @@ BeamSet LightGrid::generate() const {
         out.end_object.insert(out.end_object.end(), tb.end_object.begin(), tb.end_object.end());
     }
     st.beams_generated = static_cast<std::int64_t>(out.beams.size());
+}
+
+BeamSet LightGrid::generate() const {
+    BeamSet out;
+    Lattice lattice;
+    const int max_level = s_.adaptive ? s_.iterations : 0;
+    const int s0 = res_ / s_.grid;
+    std::vector<Cell> cells;
+    for (int j = 0; j < s_.grid; ++j)
+        for (int i = 0; i < s_.grid; ++i) cells.push_back({0, i * s0, j * s0});
+    std::vector<Cell> leaves;
+    for (int level = 0; level <= max_level && !cells.empty(); ++level) {
+        const int size = s0 >> level;
+        const bool can_split = level < max_level;
+        trace_points(lattice, cells, size, can_split ? 1 : 2);
+        std::vector<std::uint8_t> action(cells.size(), 1);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cells.size(), 16), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t n = r.begin(); n != r.end(); ++n) action[n] = oracle(lattice, cells[n], size, level, can_split);
+        });
+        std::vector<Cell> next;
+        for (std::size_t n = 0; n < cells.size(); ++n) {
+            if (action[n] == 1) leaves.push_back(cells[n]);
+            if (action[n] != 2) continue;
+            ++out.stats.beams_split;
+            const Cell& c = cells[n];
+            const int h = size / 2;
+            for (int dj = 0; dj <= 1; ++dj)
+                for (int di = 0; di <= 1; ++di) next.push_back({level + 1, c.i + di * h, c.j + dj * h});
+        }
+        cells.swap(next);
+    }
+    leaf_beams(lattice, leaves, s0, out);
     return out;
 }
 

@@ -84,6 +84,13 @@ public:
 
 private:
     struct Cell { int level, i, j; };
+    struct Lattice;    // the traced lattice points (light_grid.cpp)
+    struct TriBeams;   // the beams of one triangle of lattice points (light_grid.cpp)
+    void trace_points(Lattice& lattice, const std::vector<Cell>& cells, int size, int step) const;
+    std::uint8_t oracle(const Lattice& lattice, const Cell& c, int size, int level, bool can_split) const;
+    void leaf_beams(const Lattice& lattice, const std::vector<Cell>& leaves, int s0, BeamSet& out) const;
+    void make_triangle(const Lattice& lattice, const glm::ivec2 (&ci)[3], TriBeams& tb, bool clip) const;
+    void emit(const glm::dvec2 (&c)[3], const LightPath* const (&p)[3], TriBeams& tb) const;
     double triangle_flux(const glm::dvec2& a, const glm::dvec2& b, const glm::dvec2& c) const;
     void ray_at(double i, double j, glm::dvec3& origin, glm::dvec3& dir) const;
 
