@@ -77,8 +77,13 @@ function(caustics_add_method name)
     target_link_libraries(${test_name} PRIVATE method_${name}_builtin caustics::testing GTest::gtest_main)
     target_compile_definitions(${test_name} PRIVATE CAUSTICS_SOURCE_DIR="${CAUSTICS_DATA_DIR}"
                                CAUSTICS_BINARY="$<TARGET_FILE:caustics::caustics>")
-    # Two properties of one value each: gtest_discover_tests splits a list value.
-    gtest_discover_tests(${test_name} DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT 600
+    # Two properties of one value each: gtest_discover_tests splits a list value. The time limit is
+    # tripled in the project's sanitized build (instrumented code runs several times slower).
+    set(timeout 600)
+    if(CAUSTICS_SANITIZE)
+      set(timeout 1800)
+    endif()
+    gtest_discover_tests(${test_name} DISCOVERY_TIMEOUT 60 PROPERTIES TIMEOUT ${timeout}
                          ENVIRONMENT "CAUSTICS_DATA_DIR=${CAUSTICS_DATA_DIR}"
                          ENVIRONMENT_MODIFICATION "CAUSTICS_PLUGIN_PATH=path_list_prepend:${CMAKE_BINARY_DIR}/plugins")
   endforeach()

@@ -171,7 +171,11 @@ TEST_P(SweepFaults, AFailingRunIsRecordedAndTheRestRun) {
       "methods": {"caustic_triangles": {"grid": [16]}, "sweep_fault": {"fault": ["segv", "hang", "abort", "fork_segv", "none"]}}
     })";
     const fs::path out = d.path() / "out";
-    const std::string plugins = "CAUSTICS_PLUGIN_PATH=" + quote(CAUSTICS_TEST_PLUGIN_DIR);
+    // Under AddressSanitizer (scripts/test.sh --sanitize) the injected segmentation faults must still reach
+    // the process as the signal they are (ASan's own handler would end it with exit code 1): handle_segv=0
+    // leaves SIGSEGV to the system. A build without ASan ignores the variable.
+    const std::string plugins = "CAUSTICS_PLUGIN_PATH=" + quote(CAUSTICS_TEST_PLUGIN_DIR) +
+                                " ASAN_OPTIONS=halt_on_error=1:detect_leaks=0:handle_segv=0";
     ASSERT_EQ(run_caustics("sweep " + quote(spec.string()) + " --threads 2 --out " + quote(out.string()) + " --cache " +
                                quote((d.path() / "cache").string()) + (isolate ? " --isolate-runs" : ""),
                            d.path() / "log", plugins),
