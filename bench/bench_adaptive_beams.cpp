@@ -5,7 +5,8 @@
 // surface caustics) as counters. Families: the scene (0 sphere_fog, 1 pool_murky), adaptive (16, 3 levels)
 // against the uniform 64 x 64 grid (beams and fill), and the tight hull against the prism (fill and time);
 // the second argument is the thread count (1 or 2); BM_VolumeView sweeps the volume view's levers
-// (volume_step, volume_subpixels: 1, 1 is the paper's one ray per pixel centre, 2, 2 the defaults).
+// (volume_step, volume_subpixels: 1, 1 is the paper's one ray per pixel centre, 2, 2 the defaults);
+// BM_OracleAndSurface compares the split oracle and camera surface settings with the former defaults.
 #include <benchmark/benchmark.h>
 
 #include <map>
@@ -83,8 +84,20 @@ void BM_VolumeView(benchmark::State& state) {
     run(state, {{"volume_step", std::to_string(state.range(2))}, {"volume_subpixels", std::to_string(state.range(3))}});
 }
 
+// The split oracle and the camera's surface pass, before and after in one run (third argument): 0 the
+// former defaults (deviation 0.05, no fold split, point-in-beam camera surface), 1 the oracle at 1 % and on
+// folds with point-in-beam, 2 the defaults (the oracle and the camera surface by pixel coverage).
+void BM_OracleAndSurface(benchmark::State& state) {
+    const int v = static_cast<int>(state.range(2));
+    std::map<std::string, std::string> params;
+    if (v == 0) params = {{"deviation", "0.05"}, {"fold_split", "false"}};
+    if (v <= 1) params["camera_surface"] = "point";
+    run(state, params);
+}
+
 }  // namespace
 
+BENCHMARK(BM_OracleAndSurface)->ArgsProduct({{0, 1}, {2}, {0, 1, 2}})->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true)->UseRealTime();
 BENCHMARK(BM_Adaptive)->ArgsProduct({{0, 1}, {1, 2}})->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true)->UseRealTime();
 BENCHMARK(BM_Uniform64)->ArgsProduct({{0, 1}, {2}})->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true)->UseRealTime();
 BENCHMARK(BM_Prism)->ArgsProduct({{0, 1}, {2}})->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true)->UseRealTime();
