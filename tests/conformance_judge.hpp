@@ -1,7 +1,8 @@
 #pragma once
 // How the conformance suite judges one method on one analytic case (tests/test_conformance.cpp for the
 // fixed cases, tests/test_conformance_drawn.cpp for the randomly drawn ones), at the method's default
-// parameters on the scene's receiver; the no-caustic baseline is the flat interface's irradiance for
+// parameters (or those CAUSTICS_CONFORMANCE_PARAMS sets) on the scene's receiver; the no-caustic
+// baseline is the flat interface's irradiance for
 // water, the best constant for a solid refractor:
 //   - capabilities() may refuse the case, with a reason; nothing else is then asked;
 //   - the output is finite (and, with `full`, bitwise identical for 1 and 2 threads and across renders);
@@ -68,21 +69,32 @@ struct Rendered {
 // The parameter overrides CAUSTICS_CONFORMANCE_PARAMS sets ("key=value,key=value"), kept where `info` declares
 // the key: the suite then judges each method's claim at those parameters instead of its defaults (the claim
 // is a function of the parameters, so it must hold at any of them). Unset: the defaults.
-inline std::map<std::string, std::string> conformance_overrides(const MethodInfo& info) {
+// Every "key=value" item of CAUSTICS_CONFORMANCE_PARAMS (spaces around items and '=' ignored).
+inline std::map<std::string, std::string> conformance_params() {
     std::map<std::string, std::string> out;
     const char* env = std::getenv("CAUSTICS_CONFORMANCE_PARAMS");
     if (!env) return out;
     const std::string text = env;
+    auto trim = [](const std::string& t) {
+        const std::size_t a = t.find_first_not_of(" \t"), b = t.find_last_not_of(" \t");
+        return a == std::string::npos ? std::string() : t.substr(a, b - a + 1);
+    };
     std::size_t at = 0;
     while (at <= text.size()) {
         const std::size_t comma = std::min(text.find(',', at), text.size());
         const std::string item = text.substr(at, comma - at);
         const std::size_t eq = item.find('=');
-        if (eq != std::string::npos)
-            for (const ParamSpec& p : info.params)
-                if (p.name == item.substr(0, eq)) out[p.name] = item.substr(eq + 1);
+        if (eq != std::string::npos) out[trim(item.substr(0, eq))] = trim(item.substr(eq + 1));
         at = comma + 1;
     }
+    return out;
+}
+
+inline std::map<std::string, std::string> conformance_overrides(const MethodInfo& info) {
+    std::map<std::string, std::string> out;
+    for (const auto& [key, value] : conformance_params())
+        for (const ParamSpec& p : info.params)
+            if (p.name == key) out[p.name] = value;
     return out;
 }
 
@@ -101,8 +113,8 @@ inline std::vector<Rendered> render_case(const MethodInfo& info, const std::map<
     return out;
 }
 
-// The claim `info` states at its defaults on frame 0 of `scene` (prepare and update, no render); a refused
-// scene gives an outside claim with the refusal as its reason.
+// The claim `info` states at its defaults (or CAUSTICS_CONFORMANCE_PARAMS) on frame 0 of `scene` (prepare
+// and update, no render); a refused scene gives an outside claim with the refusal as its reason.
 inline AccuracyClaim claim_only(const MethodInfo& info, const Scene& scene) {
     std::unique_ptr<Method> method = info.create(ParamSet::resolve(info.name, info.params, conformance_overrides(info)));
     const Capability cap = method->capabilities(scene);
@@ -145,8 +157,8 @@ inline double chart_flux(const Image& e, const ReceiverChart& chart) {
     return total;
 }
 
-// Judges `info` at its defaults on `scene` (frame 0) against the scene's closed form, with gtest
-// expectations; `full` adds the determinism and twice-the-grid checks. Returns the row it measured.
+// Judges `info` at its defaults (or CAUSTICS_CONFORMANCE_PARAMS) on `scene` (frame 0) against the scene's
+// closed form, with gtest expectations; `full` adds the determinism and twice-the-grid checks. Returns the row it measured.
 inline JudgedRow judge_case(const MethodInfo& info, const std::string& case_name, const Scene& scene, bool flat_truth,
                             bool full) {
     JudgedRow row;

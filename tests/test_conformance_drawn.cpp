@@ -1,6 +1,7 @@
 // The conformance suite on randomly drawn hard cases (tests/conformance_drawn.hpp): every registered method at
-// its defaults on CAUSTICS_CONFORMANCE_CASES drawn sine and Gaussian cases of seed CAUSTICS_CONFORMANCE_SEED
-// (both printed), judged as on the fixed cases (tests/conformance_judge.hpp), and besides:
+// its defaults (or the parameters CAUSTICS_CONFORMANCE_PARAMS sets) on CAUSTICS_CONFORMANCE_CASES drawn sine
+// and Gaussian cases of seed CAUSTICS_CONFORMANCE_SEED (both printed), judged as on the fixed cases
+// (tests/conformance_judge.hpp), and besides:
 //   - the regime quantities a claim lists (RegimeBound) agree with the same quantities computed from the
 //     closed-form surface (conformance_drawn.hpp), so that a case called outside really lies beyond the
 //     stated bound, and a case called inside within it;
@@ -88,6 +89,13 @@ TEST_P(ConformanceDrawn, MeetsItsClaimOnDrawnHardCases) {
     const MethodInfo& info = require_method(GetParam());
     const std::uint64_t seed = test_support::conformance_seed();
     const int count = test_support::conformance_case_count();
+    // A key no registered method declares is a typing error, not a setting to ignore.
+    for (const auto& [key, value] : test_support::conformance_params()) {
+        bool declared = false;
+        for (const MethodInfo* m : registered_methods())
+            for (const ParamSpec& p : m->params) declared = declared || p.name == key;
+        ASSERT_TRUE(declared) << "CAUSTICS_CONFORMANCE_PARAMS names '" << key << "', which no registered method declares";
+    }
     std::string params;
     for (const auto& [k, v] : test_support::conformance_overrides(info)) params += (params.empty() ? "" : ",") + k + "=" + v;
     std::printf("CAUSTICS_CONFORMANCE_SEED=%llu CAUSTICS_CONFORMANCE_CASES=%d CAUSTICS_CONFORMANCE_PARAMS=%s (%s)\n",

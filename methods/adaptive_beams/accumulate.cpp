@@ -73,11 +73,12 @@ void accumulate_camera(const BeamSet& set, const Scene& scene, const CameraGBuff
     // pass takes the others.
     Image plane_light;
     std::vector<std::uint8_t> by_coverage(nb, 0);
+    double coverage_ms = 0.0;   // part of the camera's surface stage, not of the hulls'
     if (surface && s.surface_coverage) {
+        Stopwatch coverage_clock;
         plane_light = Image(g.width, g.height);
-        SurfaceCoverageStats cs;
-        by_coverage = deposit_plane_beams(set, scene, g, cam, plane_light, cs);
-        stats.coverage_beams += cs.beams;
+        by_coverage = deposit_plane_beams(set, scene, g, cam, plane_light, stats.coverage_beams);
+        coverage_ms = coverage_clock.ms();
     }
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nb, 32), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t n = r.begin(); n != r.end(); ++n) {
@@ -113,7 +114,8 @@ void accumulate_camera(const BeamSet& set, const Scene& scene, const CameraGBuff
         stats.offscreen += (!(use[n] & 1) || vol_px[n].y_lo > vol_px[n].y_hi) &&
                            (!(use[n] & 2) || surf_px[n].y_lo > surf_px[n].y_hi);
     }
-    stats.hulls_ms += clock.ms();
+    stats.hulls_ms += clock.ms() - coverage_ms;
+    stats.surface_ms += coverage_ms;
     if (surface) {
         clock.reset();
         const int bands = (g.height + kBandRows - 1) / kBandRows;

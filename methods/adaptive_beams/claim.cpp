@@ -66,13 +66,16 @@ AccuracyClaim claim_for(const FrameGeometry& frame, const GridSettings& s) {
         if (b.quantity == "water_interface")
             return "no height-field water interface: solid refractors are not claimed (ball_lens, whose beams fold into "
                    "its ring caustic)";
-        char why[320];
+        const char* further = focus_limit == kFocusCoarse
+                                  ? " (a deviation of at most 0.01 claims up to the first focus)"
+                                  : focus_limit == kFocusFine
+                                        ? " (1.5 x needs a finest grid of 256 with fold_split, or a uniform grid of 256)"
+                                        : "";
+        char why[400];
         std::snprintf(why, sizeof why,
                       "the receiver lies %.3g m below the water, %.2f x the way to the first focus at %.3g m, beyond "
-                      "the %.2f where the beams' error was measured within %.2f at this finest grid and deviation "
-                      "(1.5 needs a finest grid of %d and fold_split)",
-                      w.depth, b.value, w.focus.first_focus_depth, focus_limit, kClaimError,
-                      static_cast<int>(kFoldFinestGrid));
+                      "the %.2f where the beams' error was measured within %.2f at this finest grid and deviation%s",
+                      w.depth, b.value, w.focus.first_focus_depth, focus_limit, kClaimError, further);
         return why;
     });
 }

@@ -19,7 +19,7 @@ struct PlaneBatch {
 }  // namespace
 
 std::vector<std::uint8_t> deposit_plane_beams(const BeamSet& set, const Scene& scene, const CameraGBuffer& g,
-                                              const CameraModel& cam, Image& surface, SurfaceCoverageStats& stats) {
+                                              const CameraModel& cam, Image& surface, std::int64_t& deposited) {
     const std::size_t nb = set.beams.size();
     std::vector<std::uint8_t> taken(nb, 0);
     std::map<int, PlaneBatch> batches;
@@ -41,8 +41,10 @@ std::vector<std::uint8_t> deposit_plane_beams(const BeamSet& set, const Scene& s
         for (int i = 0; i < 3 && ok; ++i) {
             const double stretch = glm::length(b.dp[i]);
             ends[i] = b.point(i, b.ye[i]);
-            // An edge cut short by the energy cutoff does not end on the plane, whatever its path's end.
-            ok = std::abs(glm::dot(ends[i] - plane.center, np)) <= 1e-6 * (1.0 + (b.ye[i] - b.ys[i]) * stretch) &&
+            // An edge cut short by the energy cutoff does not end on the plane, whatever its path's end. The
+            // tolerance is relative to the coordinates and the edge's length: the hits are single precision.
+            const double scale = 1.0 + glm::length(ends[i] - plane.center) + (b.ye[i] - b.ys[i]) * stretch;
+            ok = std::abs(glm::dot(ends[i] - plane.center, np)) <= 1e-5 * scale &&
                  cam.project(ends[i], px[i], py[i]) && std::abs(px[i]) < far_out && std::abs(py[i]) < far_out;
             arriving += b.w[i] * std::exp(-sigma_t * (b.ye[i] - b.ys[i]) * stretch) / 3.0;
         }
@@ -51,10 +53,7 @@ std::vector<std::uint8_t> deposit_plane_beams(const BeamSet& set, const Scene& s
         const glm::dvec3 centroid = (ends[0] + ends[1] + ends[2]) / 3.0;
         const glm::dvec3 to_camera = cam.position - centroid;
         const glm::dvec3 light = b.dp[0] + b.dp[1] + b.dp[2];
-        if (glm::dot(light, np) * glm::dot(to_camera, np) >= 0.0) {
-            ++stats.back_facing;   // lights the side the camera does not see: point-in-beam gives 0 there too
-            continue;
-        }
+        if (glm::dot(light, np) * glm::dot(to_camera, np) >= 0.0) continue;   // lights the side the camera does not see
         // Screen pixels per unit area of the plane: the projected triangle's area over the section's, or
         // where the section is (nearly) a point, the pinhole's Jacobian cos(theta) / (t^2 Omega_pixel).
         const double a_surface = 0.5 * glm::length(glm::cross(ends[1] - ends[0], ends[2] - ends[0]));
@@ -71,7 +70,7 @@ std::vector<std::uint8_t> deposit_plane_beams(const BeamSet& set, const Scene& s
         for (int i = 0; i < 3; ++i) batch.positions.emplace_back(static_cast<float>(px[i]), static_cast<float>(py[i]));
         batch.triangles.emplace_back(base, base + 1, base + 2);
         batch.values.push_back(static_cast<float>(b.flux * arriving * scale));
-        ++stats.beams;
+        ++deposited;
     }
     TriangleRaster raster;
     RasterOptions options;

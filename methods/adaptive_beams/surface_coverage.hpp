@@ -20,14 +20,11 @@
 
 namespace caustics::adaptive_beams {
 
-struct SurfaceCoverageStats {
-    std::int64_t beams = 0;          // beams deposited by coverage
-    std::int64_t back_facing = 0;    // beams whose light reaches the side of the plane the camera does not see
-};
-
-// Adds the box-filtered irradiance of the beams it takes to `surface` (covered pixels of their plane) and
-// returns, per beam, 1 where it took the beam (the point-in-beam pass must then skip it).
+// Adds the box-filtered irradiance of the beams it takes to `surface` (covered pixels of their plane), adds
+// the number it deposited to `deposited`, and returns, per beam, 1 where it took the beam (the point-in-beam
+// pass must then skip it). A beam whose light reaches the side of the plane the camera does not see is
+// taken and deposits nothing, as point-in-beam would give it nothing there.
 std::vector<std::uint8_t> deposit_plane_beams(const BeamSet& set, const Scene& scene, const CameraGBuffer& g,
-                                              const CameraModel& cam, Image& surface, SurfaceCoverageStats& stats);
+                                              const CameraModel& cam, Image& surface, std::int64_t& deposited);
 
 }  // namespace caustics::adaptive_beams

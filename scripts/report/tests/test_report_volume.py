@@ -60,8 +60,28 @@ class VolumeReportTest(unittest.TestCase):
             self.assertIn("| 0.9 |", fog)
             for ext in ("png", "pdf"):
                 self.assertGreater(os.path.getsize(os.path.join(d, "figures", f"volume_fog.{ext}")), 1000)
+                self.assertGreater(os.path.getsize(os.path.join(d, "figures", f"volume_time_vs_error_fog.{ext}")), 1000)
+            self.assertIn("volume_time_vs_error_fog.png", fog)
+            self.assertFalse(os.path.exists(os.path.join(d, "figures", "volume_time_vs_error_sine.png")))
             self.assertTrue(os.path.exists(os.path.join(d, "tables", "volume_fog.md")))
             self.assertFalse(os.path.exists(os.path.join(d, "tables", "volume_sine.md")))
+
+    def test_volume_plot_marks_the_pareto_front_and_labels_the_varied_parameter(self):
+        import pandas as pd
+        import matplotlib.pyplot as plt
+        from volume import draw_volume_time_vs_error
+        runs = pd.DataFrame({"label": ["beams"] * 3, "frame_ms": [10.0, 20.0, 40.0],
+                             "volume_error": [0.5, 0.6, 0.2], "volume_error_is_net": [True] * 3,
+                             "volume_baseline": [0.9] * 3, "param.step": [4, 2, 1], "param.grid": [16] * 3})
+        fig, ax = plt.subplots()
+        draw_volume_time_vs_error(ax, runs, "fog")
+        steps = [line for line in ax.get_lines() if line.get_label().startswith("beams")]
+        self.assertEqual(len(steps), 1)
+        # (20 ms, 0.6) is beaten by (10 ms, 0.5): the front is the first and the last run.
+        self.assertEqual(list(steps[0].get_xdata()), [10.0, 40.0])
+        texts = sorted(t.get_text() for t in ax.texts)
+        self.assertEqual(texts, ["step 1", "step 2", "step 4"])
+        plt.close(fig)
 
 
 if __name__ == "__main__":
