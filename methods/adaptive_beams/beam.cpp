@@ -85,11 +85,7 @@ BeamStatus make_beam(const std::array<EdgeRay, 3>& edges, double flux, int mediu
                          glm::dot(edges[2].start - edges[0].start, edges[2].start - edges[0].start);
     if (!(a_start > 1e-10 * scale) || !(a_start > 0.0)) return BeamStatus::Degenerate;
     b.a_min = clamp_ratio * a_start;
-    double r[2];
-    int nr = 0;
-    real_roots(b.a0, b.a1, b.a2, r, nr);
-    for (int k = 0; k < nr; ++k)
-        if (r[k] > b.y0 && r[k] < b.y1) b.flipped = true;
+    b.flipped = passes_focus(b);
     out = b;
     return BeamStatus::Ok;
 }

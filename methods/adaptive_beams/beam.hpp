@@ -109,6 +109,16 @@ inline void real_roots(double a, double b, double c, double* out, int& n) {
     if (q != 0.0) out[n++] = a / q;
 }
 
+// Whether A(y) changes sign inside the beam's slab (y0, y1): the beam passes a focus there.
+inline bool passes_focus(const Beam& b) {
+    double r[2];
+    int nr = 0;
+    real_roots(b.a0, b.a1, b.a2, r, nr);
+    for (int k = 0; k < nr; ++k)
+        if (r[k] > b.y0 && r[k] < b.y1) return true;
+    return false;
+}
+
 enum class HullType { Tight, Prism };
 
 // The bounding volume's corners (Sec. 4.3, Fig. 5). Tight: the six corners P_i(y0), P_i(y1), whose

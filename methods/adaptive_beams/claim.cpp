@@ -39,18 +39,13 @@ Capability supports(const Scene& scene) {
     return Capability::yes();
 }
 
-static double claimed_focus_fraction(const GridSettings& s) {
+AccuracyClaim claim_for(const FrameGeometry& frame, const GridSettings& s) {
     const int finest = s.grid << (s.adaptive ? s.iterations : 0);
     // A uniform grid (adaptive off) has every cell at the finest level: the deviation test is moot.
     const double deviation = s.adaptive ? s.deviation : 0.0;
-    if (deviation > kFineDeviation) return kFocusCoarse;
-    return finest >= kFoldFinestGrid && (s.fold_split || !s.adaptive) ? kFocusFolds : kFocusFine;
-}
-
-AccuracyClaim claim_for(const FrameGeometry& frame, const GridSettings& s) {
-    const int finest = s.grid << (s.adaptive ? s.iterations : 0);
-    const double deviation = s.adaptive ? s.deviation : 0.0;
-    const double focus_limit = claimed_focus_fraction(s);
+    const double focus_limit = deviation > kFineDeviation ? kFocusCoarse
+                               : finest >= kFoldFinestGrid && (s.fold_split || !s.adaptive) ? kFocusFolds
+                                                                                           : kFocusFine;
     std::vector<RegimeBound> bounds = {{"finest_grid", static_cast<double>(finest), kMinFinestGrid, false},
                                        {"deviation", deviation, kCoarseDeviation, true}};
     // Solid refractors are not claimed: the beams through a ball lens's rim fold into its ring caustic

@@ -199,13 +199,7 @@ void LightGrid::emit(const glm::dvec2 (&c)[3], const LightPath* const (&p)[3], T
         }
         if (!cut_by_energy(b, mc.extinction(), s_.energy_cutoff)) { ++tb.energy; continue; }
         tb.flipped += b.flipped;
-        {
-            // A focus before the beam ends: a root of A(y) inside the slab the energy cut left.
-            double r[2];
-            int nr = 0;
-            real_roots(b.a0, b.a1, b.a2, r, nr);
-            for (int j = 0; j < nr; ++j) tb.folded = tb.folded || (r[j] > b.y0 && r[j] < b.y1);
-        }
+        tb.folded = tb.folded || passes_focus(b);   // a focus inside the slab the energy cut left
         // The oracle's camera term: the closest point to the camera on the central ray (Sec. 4.2).
         const glm::dvec3 start = (edges[0].start + edges[1].start + edges[2].start) / 3.0;
         const glm::dvec3 dir = glm::normalize(edges[0].dir + edges[1].dir + edges[2].dir);

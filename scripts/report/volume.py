@@ -79,8 +79,7 @@ def volume_images(runs, scene, directory, sweep_dir):
 
 def _varying_params(group):
     """The parameter columns whose value differs between the runs of one method (what a sweep varied)."""
-    cols = [c for c in group.columns if c.startswith("param.") and group[c].nunique(dropna=True) > 1]
-    return [c for c in cols if c not in ("param.iterations",)] or cols
+    return [c for c in group.columns if c.startswith("param.") and group[c].nunique(dropna=True) > 1]
 
 
 def draw_volume_time_vs_error(ax, runs, scene):
