@@ -18,8 +18,11 @@ const char* const kDoc =
     "Parseval). Needs one directional light and one height-field dielectric surface, and no other "
     "specular object. grid must be a product of 2, 3, 5, 7 (FFTW's fast sizes; other sizes are refused "
     "with the nearest valid ones). iterations has no meaning here: its only valid value is 1. "
-    "wavelength is the wavelength in the water; 0 = auto, two grid spacings (Stam/Moravec); shorter than "
-    "two grid spacings is refused. wavelengths > 1 averages that many wavelengths over [lambda, 2 lambda] "
+    "wavelength is the wavelength in the water; 0 = auto: per frame, the shortest of 2 dx 2^(-k/4) "
+    "(k = 0..16) at which the refracted field is sampled at 1.5 x its Nyquist rate (from the largest "
+    "deviation of the refracted rays; health wavelength_um), so that the diffraction blur is as small as "
+    "the grid allows; two grid spacings is Stam's (after Moravec); shorter than 1/8 of a grid spacing is "
+    "refused. wavelengths > 1 averages that many wavelengths over [lambda, 2 lambda] "
     "(reduces spurious diffraction; with material dispersion the index spans ior + dispersion (shortest) "
     "to ior (longest)) and fills receiver_rgb. Oblique light: the exact carrier (Floquet: only the field "
     "relative to it is periodic). Claims accuracy (accuracy_claim) before the first focus where the "
@@ -46,7 +49,8 @@ std::vector<ParamSpec> param_table() {
                  {"256", "512"}});
     p.push_back({"iterations", ParamType::Int, "1", 1, 1, {}, "no meaning for this method: only 1 is valid"});
     p.push_back({"wavelength", ParamType::Float, "0", 0.0, 1e3, {},
-                 "wavelength in the water [m]; 0 = auto (two grid spacings); at least two grid spacings"});
+                 "wavelength in the water [m]; 0 = auto (the shortest the grid samples for the surface's slopes, "
+                 "at most two grid spacings, Stam's choice); at least 1/8 grid spacing"});
     p.push_back({"propagator", ParamType::Enum, "angular_spectrum", 0, 0, {"angular_spectrum", "fresnel"},
                  "transfer function: band-limited angular spectrum, or paraxial Fresnel (unitary)"});
     p.push_back({"wavelengths", ParamType::Int, "1", 1, 16, {},

@@ -35,7 +35,7 @@ SurfaceStats surface_stats(const float* h, int nx, int ny, double dx, double dy,
             const float* hm = h + static_cast<std::size_t>(j == 0 ? ny - 1 : j - 1) * nx;
             const float* h0 = h + static_cast<std::size_t>(j) * nx;
             const float* hp = h + static_cast<std::size_t>(j + 1 == ny ? 0 : j + 1) * nx;
-            double e_min = 0.0, slope2 = 0.0, curvature = 0.0;
+            double e_min = 0.0, slope2 = 0.0, curvature = 0.0, deviation2 = 0.0;
             for (int i = lo; i < hx; ++i) {
                 const int im = i == 0 ? nx - 1 : i - 1, ip = i + 1 == nx ? 0 : i + 1;
                 const double gx = (h0[ip] - h0[im]) * ihx, gy = (hp[i] - hm[i]) * ihy;
@@ -43,6 +43,16 @@ SurfaceStats surface_stats(const float* h, int nx, int ny, double dx, double dy,
                 const double hyy = (static_cast<double>(hp[i]) - 2.0 * h0[i] + hm[i]) * iyy;
                 const double hxy = (static_cast<double>(hp[ip]) - hp[im] - hm[ip] + hm[im]) * ixy;
                 slope2 = std::max(slope2, gx * gx + gy * gy);
+                // Snell with the vertex's normal (-gx, -gy, 1) / |.|: t = d / n + (cos_l / n - cos_tl) nrm.
+                const double inv = 1.0 / std::sqrt(1.0 + gx * gx + gy * gy);
+                const glm::dvec3 nrm(-gx * inv, -gy * inv, inv);
+                const double cos_l = -glm::dot(d, nrm);
+                const double k2 = 1.0 - (1.0 - cos_l * cos_l) / (ior * ior);
+                if (cos_l > 0.0 && k2 >= 0.0) {
+                    const double a = cos_l / ior - std::sqrt(k2);
+                    const glm::dvec2 dev = a * glm::dvec2(nrm.x, nrm.y);   // t_xy - d_xy / n
+                    deviation2 = std::max(deviation2, glm::dot(dev, dev));
+                }
                 // The square roots only where a bound says the extreme may change (exact either way).
                 const double mean_h = std::abs(0.5 * (hxx + hyy));
                 if (mean_h + 0.5 * std::abs(hxx - hyy) + std::abs(hxy) > curvature)
@@ -57,7 +67,7 @@ SurfaceStats surface_stats(const float* h, int nx, int ny, double dx, double dy,
                 if (centre - (0.5 * std::abs(a - b) + std::abs(o)) < e_min)
                     e_min = std::min(e_min, centre - std::sqrt(0.25 * (a - b) * (a - b) + o * o));
             }
-            rows[static_cast<std::size_t>(j)] = {e_min, std::sqrt(slope2), curvature};
+            rows[static_cast<std::size_t>(j)] = {e_min, std::sqrt(slope2), curvature, std::sqrt(deviation2)};
         }
     });
     SurfaceStats s;
@@ -65,6 +75,7 @@ SurfaceStats surface_stats(const float* h, int nx, int ny, double dx, double dy,
         s.e_min = std::min(s.e_min, r.e_min);
         s.slope = std::max(s.slope, r.slope);
         s.curvature = std::max(s.curvature, r.curvature);
+        s.deviation = std::max(s.deviation, r.deviation);
     }
     return s;
 }
@@ -72,6 +83,17 @@ SurfaceStats surface_stats(const float* h, int nx, int ny, double dx, double dy,
 SurfaceStats surface_stats(const HeightField& hf, const glm::dvec3& light, double ior) {
     if (hf.nx < 3 || hf.ny < 3) return {};
     return surface_stats(hf.height.data(), hf.nx, hf.ny, hf.spacing.x, hf.spacing.y, false, light, ior);
+}
+
+double auto_wavelength(double spacing, double deviation) {
+    const auto at = [spacing](int k) { return 2.0 * spacing * std::exp2(-0.25 * k); };
+    int k = 0;
+    while (k < 4 * kMaxHalvings && at(k + 1) >= kSamplingMargin * 2.0 * spacing * deviation) ++k;
+    return at(k);
+}
+
+double sampling_margin(double lambda, double spacing, double deviation) {
+    return deviation > 0.0 ? lambda / (2.0 * spacing * deviation) : std::numeric_limits<double>::infinity();
 }
 
 Regime estimate_regime(const SurfaceStats& stats, const glm::dvec3& light, double ior, double lambda, double depth,

@@ -140,16 +140,15 @@ public:
         // has the same rectangle (size = resolution cells).
         lx_ = d.size.x;
         ly_ = d.size.y;
-        const double spacing = std::max(lx_, ly_) / grid_;
-        double lambda = wavelength_ > 0.0 ? wavelength_ : 2.0 * spacing;
-        if (lambda < 2.0 * spacing * (1.0 - 1e-9)) {
+        spacing_ = std::max(lx_, ly_) / grid_;
+        const double floor = 2.0 * spacing_ / std::ldexp(1.0, kMaxHalvings);
+        if (wavelength_ > 0.0 && wavelength_ < floor * (1.0 - 1e-9)) {
             std::ostringstream s;
-            s << "wavelength " << wavelength_ << " m is below two grid spacings (" << 2.0 * spacing
-              << " m for grid " << grid_ << " over " << lx_ << " x " << ly_
-              << " m): use 0 (auto) or a length >= " << 2.0 * spacing << " m, or a larger grid";
+            s << "wavelength " << wavelength_ << " m is below 1/" << (1 << (kMaxHalvings - 1)) << " of a grid spacing ("
+              << floor << " m for grid " << grid_ << " over " << lx_ << " x " << ly_
+              << " m): use 0 (auto, from the surface's slopes) or a length >= " << floor << " m, or a larger grid";
             throw InputError(kName, "wavelength", s.str());
         }
-        lambda_ = lambda;
         const Light& light = scene.lights.front();
         const glm::dvec3 dir = glm::normalize(light.direction);
         cos_i_ = -dir.z;
@@ -160,47 +159,14 @@ public:
         const double n_mid = water.material.ior + 0.5 * (samples_ > 1 ? water.material.dispersion : 0.0);
         const glm::dvec2 s_mid = glm::dvec2(dir.x, dir.y) / n_mid;
         refracted_ = glm::dvec3(s_mid.x, s_mid.y, -std::sqrt(std::max(0.0, 1.0 - glm::dot(s_mid, s_mid))));
-        const glm::dvec2 beam_walk = glm::dvec2(refracted_.x, refracted_.y) / (-refracted_.z);
-        // Wavelength samples over [lambda, 2 lambda]; blue (short) gets the highest index.
-        spectral_.clear();
-        spectral_.resize(static_cast<std::size_t>(samples_));
-        const double n_lo = water.material.ior, dn = samples_ > 1 ? water.material.dispersion : 0.0;
-        double rgb_sum[3] = {0, 0, 0};
-        for (int m = 0; m < samples_; ++m) {
-            Spectral& sp = spectral_[static_cast<std::size_t>(m)];
-            const double t = samples_ > 1 ? static_cast<double>(m) / (samples_ - 1) : 0.0;
-            sp.lambda = lambda * (1.0 + t);
-            sp.n = n_lo + dn * (1.0 - t);
-            const double tc[3] = {1.0, 0.5, 0.0};   // R, G, B centres on the band
-            for (int c = 0; c < 3; ++c) {
-                sp.rgb[c] = samples_ > 1 ? static_cast<float>(std::max(0.0, 1.0 - std::abs(t - tc[c]) / 0.5)) : 1.0f;
-                rgb_sum[c] += sp.rgb[c];
-            }
-            // Snell at the mean surface: the transverse wave vector is continuous.
-            const glm::dvec2 s_t = glm::dvec2(dir.x, dir.y) / sp.n;    // sin(theta_t) vector
-            const double cos_t = std::sqrt(std::max(0.0, 1.0 - glm::dot(s_t, s_t)));
-            sp.refracted = glm::dvec3(s_t.x, s_t.y, -cos_t);
-            const double lambda0 = sp.n * sp.lambda;                  // vacuum wavelength
-            sp.phase_per_m = 2.0 * std::numbers::pi / lambda0 * (sp.n * cos_t - cos_i_);
-            // Carrier: the exact transverse frequency s_t / lambda (the field without it is periodic, so
-            // it need not lie on the lattice 1 / L; snapping it tilted the light by up to lambda / 2L).
-            const glm::dvec2 bins(s_t.x / sp.lambda * lx_, s_t.y / sp.lambda * ly_);
-            WaveSetup setup;
-            setup.nx = setup.ny = grid_;
-            setup.lx = lx_;
-            setup.ly = ly_;
-            setup.wavelength = sp.lambda;
-            setup.propagator = fresnel_ ? Propagator::Fresnel : Propagator::AngularSpectrum;
-            setup.carrier_bins = bins;
-            setup.shift_walk = beam_walk;
-            sp.propagator = std::make_unique<WavePropagator>(setup);
-        }
-        for (auto& sp : spectral_)
-            for (int c = 0; c < 3; ++c) sp.rgb[c] = rgb_sum[c] > 0.0 ? static_cast<float>(sp.rgb[c] / rgb_sum[c]) : 1.0f / samples_;
+        light_ = dir;
+        ior_ = water.material.ior;
+        dispersion_ = samples_ > 1 ? water.material.dispersion : 0.0;
+        // Provisional: the automatic wavelength is chosen per frame from the surface (render()).
+        build_spectral(wavelength_ > 0.0 ? wavelength_ : 2.0 * spacing_);
         transmittance_ = scene.fresnel ? fresnel_transmittance(cos_i_, n_mid) : 1.0;
         scene_fresnel_ = scene.fresnel;
         stats_of_ = nullptr;
-        light_ = dir;
         screens_.clear();
         screens_used_ = 0;
         table_ = std::make_unique<WaveFieldTable>(grid_, grid_, samples_ > 1);
@@ -210,8 +176,7 @@ public:
 
     void update(const FrameGeometry& frame) override {
         const HeightField& hf = *frame.objects.at(static_cast<std::size_t>(water_index_)).heightfield;
-        const double n_mid = spectral_.empty() ? 1.33 : 0.5 * (spectral_.front().n + spectral_.back().n);
-        stats_ = surface_stats(hf, light_, n_mid);
+        stats_ = surface_stats(hf, light_, n_mid());
         stats_of_ = &hf;
         stats_version_ = hf_version(hf);
     }
@@ -224,9 +189,13 @@ public:
         double depth = 0.0;
         const double level = mean_level(hf);
         // A non-periodic surface is tapered over its border band: light entering there (or outside the
-        // surface) is not the scene's. Entry points of the geometric beam, on a 9 x 9 net of the receiver.
+        // surface) is not the scene's. Entry points of the light reaching a 9 x 9 net of the receiver: the
+        // flat surface's beam, less the reach of the rays the slopes bend, z |t_xy - t0_xy| / cos^3(t_t)
+        // (first order in the deviation, widened by its second-order factor 1 + deviation).
         const double band = check_edges(hf).periodic ? 0.0 : taper_band_width(lx_, ly_);
         const glm::dvec2 beam_walk = glm::dvec2(refracted_.x, refracted_.y) / std::max(1e-9, -refracted_.z);
+        const SurfaceStats stats = stats_for(hf);
+        const double reach_per_m = stats.deviation * (1.0 + stats.deviation) / std::pow(std::max(1e-3, -refracted_.z), 3);
         double margin = 1e300;
         for (int j = 0; j <= 8; ++j)
             for (int i = 0; i <= 8; ++i) {
@@ -234,22 +203,33 @@ public:
                 const double z = level - p.z;
                 depth = std::max(depth, z);
                 const glm::dvec2 rel = glm::dvec2(p) - z * beam_walk - glm::dvec2(hf.origin);
-                margin = std::min({margin, rel.x, rel.y, lx_ - rel.x, ly_ - rel.y});
+                margin = std::min(margin, std::min({rel.x, rel.y, lx_ - rel.x, ly_ - rel.y}) - std::max(z, 0.0) * reach_per_m);
             }
         const Regime r = regime(hf, depth);
         const caustics::regime::WaterRegime w = caustics::regime::water_regime(frame);
+        const double sampling = sampling_margin(wavelength_for(stats), spacing_, stats.deviation);
         std::vector<RegimeBound> bounds = {{"border_margin_m", margin, band, false},
                                            {"depth_over_first_focus", w.depth_over_first_focus(), kMaxFocusFraction, true},
                                            {"diffraction_epsilon", r.epsilon, kMaxEpsilon, true},
                                            {"spread_half_periods", r.spread, 1.0, true},
                                            {"depth_over_feature_length", w.feature_length > 0.0 ? w.depth / w.feature_length : 0.0,
-                                            kMaxDepthOverFeature, true}};
+                                            kMaxDepthOverFeature, true},
+                                           {"sampling_margin", sampling, kSamplingMargin, false}};
         if (!bounds[0].holds()) {
             std::ostringstream s;
             s.precision(3);
             s << "wave_optics: light reaching the receiver enters " << (margin < 0.0 ? "outside the surface" : "through its border band")
               << " (" << margin << " m from its edge; the surface does not tile and is tapered over " << band
               << " m at its edges)";
+            return AccuracyClaim::outside(s.str(), bounds);
+        }
+        if (!bounds[5].holds()) {
+            std::ostringstream s;
+            s.precision(3);
+            s << "wave_optics: the refracted field's phase steps up to " << 1.0 / std::max(sampling, 1e-9)
+              << " x pi per grid cell (rays deviate up to " << stats.deviation << " from the flat surface's at wavelength "
+              << wavelength_for(stats) << " m, spacing " << spacing_ << " m): it is sampled at " << sampling
+              << " x its Nyquist rate, below " << kSamplingMargin << " (a longer wavelength or a larger grid)";
             return AccuracyClaim::outside(s.str(), bounds);
         }
         if (!bounds[1].holds()) {
@@ -285,10 +265,18 @@ private:
     // The surface's part is computed by update() (it depends on the frame's geometry only, like an
     // acceleration structure) and kept for the frame's renders and claim; computed here otherwise.
     Regime regime(const HeightField& hf, double depth) const {
-        const double n_mid = spectral_.empty() ? 1.33 : 0.5 * (spectral_.front().n + spectral_.back().n);
-        const SurfaceStats stats = stats_of_ == &hf && stats_version_ == hf_version(hf) ? stats_ : surface_stats(hf, light_, n_mid);
-        return estimate_regime(stats, light_, n_mid, spectral_.empty() ? lambda_ : spectral_.back().lambda, depth,
+        const SurfaceStats stats = stats_for(hf);
+        return estimate_regime(stats, light_, n_mid(), wavelength_for(stats) * (samples_ > 1 ? 2.0 : 1.0), depth,
                                std::min(lx_, ly_));
+    }
+    double n_mid() const { return ior_ + 0.5 * dispersion_; }
+    SurfaceStats stats_for(const HeightField& hf) const {
+        return stats_of_ == &hf && stats_version_ == hf_version(hf) ? stats_ : surface_stats(hf, light_, n_mid());
+    }
+    // The shortest wavelength propagated for a surface with these statistics: the set one, or the
+    // automatic choice from the refracted field's largest spatial frequency (regime.hpp).
+    double wavelength_for(const SurfaceStats& stats) const {
+        return wavelength_ > 0.0 ? wavelength_ : auto_wavelength(spacing_, stats.deviation);
     }
     // Identifies the heights a HeightField holds now (its buffer and size, and a few samples), so that a
     // surface changed in place between update() and render() is not read from stale statistics.
@@ -305,6 +293,7 @@ private:
     std::size_t stats_version_ = 0;
     SurfaceStats stats_;
     bool find_setup(const Scene& scene, std::string& why) const;
+    void build_spectral(double lambda);
     void fill_table(const SurfaceSamples& surface, const std::vector<double>& depths, CausticOutput& out);
     LookupGeometry lookup_geometry(const HeightField& hf, const SurfaceSamples& surface,
                                    const std::vector<double>& depths) const;
@@ -316,7 +305,7 @@ private:
     int slices_;
     bool thin_screen_;
     mutable int water_index_ = -1;
-    double lx_ = 1.0, ly_ = 1.0, lambda_ = 0.0;
+    double lx_ = 1.0, ly_ = 1.0, lambda_ = 0.0, spacing_ = 1.0, ior_ = 1.33, dispersion_ = 0.0;
     double cos_i_ = 1.0, irradiance_ = 1.0, absorption_ = 0.0, transmittance_ = 1.0;
     bool scene_fresnel_ = false;
     glm::dvec3 light_{0.0, 0.0, -1.0};
@@ -435,6 +424,50 @@ const RefractedScreen& WaveOpticsMethod::screen_for(const SurfaceSamples& surfac
     return screen;
 }
 
+// The propagators for the wavelength samples over [lambda, 2 lambda] (prepare(), and render() when the
+// automatic wavelength changes with the surface).
+void WaveOpticsMethod::build_spectral(double lambda) {
+    lambda_ = lambda;
+    const glm::dvec3 dir = light_;
+    const glm::dvec2 beam_walk = glm::dvec2(refracted_.x, refracted_.y) / (-refracted_.z);
+    // Wavelength samples over [lambda, 2 lambda]; blue (short) gets the highest index.
+    spectral_.clear();
+    spectral_.resize(static_cast<std::size_t>(samples_));
+    const double n_lo = ior_, dn = dispersion_;
+    double rgb_sum[3] = {0, 0, 0};
+    for (int m = 0; m < samples_; ++m) {
+        Spectral& sp = spectral_[static_cast<std::size_t>(m)];
+        const double t = samples_ > 1 ? static_cast<double>(m) / (samples_ - 1) : 0.0;
+        sp.lambda = lambda * (1.0 + t);
+        sp.n = n_lo + dn * (1.0 - t);
+        const double tc[3] = {1.0, 0.5, 0.0};   // R, G, B centres on the band
+        for (int c = 0; c < 3; ++c) {
+            sp.rgb[c] = samples_ > 1 ? static_cast<float>(std::max(0.0, 1.0 - std::abs(t - tc[c]) / 0.5)) : 1.0f;
+            rgb_sum[c] += sp.rgb[c];
+        }
+        // Snell at the mean surface: the transverse wave vector is continuous.
+        const glm::dvec2 s_t = glm::dvec2(dir.x, dir.y) / sp.n;    // sin(theta_t) vector
+        const double cos_t = std::sqrt(std::max(0.0, 1.0 - glm::dot(s_t, s_t)));
+        sp.refracted = glm::dvec3(s_t.x, s_t.y, -cos_t);
+        const double lambda0 = sp.n * sp.lambda;                  // vacuum wavelength
+        sp.phase_per_m = 2.0 * std::numbers::pi / lambda0 * (sp.n * cos_t - cos_i_);
+        // Carrier: the exact transverse frequency s_t / lambda (the field without it is periodic, so
+        // it need not lie on the lattice 1 / L; snapping it tilted the light by up to lambda / 2L).
+        const glm::dvec2 bins(s_t.x / sp.lambda * lx_, s_t.y / sp.lambda * ly_);
+        WaveSetup setup;
+        setup.nx = setup.ny = grid_;
+        setup.lx = lx_;
+        setup.ly = ly_;
+        setup.wavelength = sp.lambda;
+        setup.propagator = fresnel_ ? Propagator::Fresnel : Propagator::AngularSpectrum;
+        setup.carrier_bins = bins;
+        setup.shift_walk = beam_walk;
+        sp.propagator = std::make_unique<WavePropagator>(setup);
+    }
+    for (auto& sp : spectral_)
+        for (int c = 0; c < 3; ++c) sp.rgb[c] = rgb_sum[c] > 0.0 ? static_cast<float>(sp.rgb[c] / rgb_sum[c]) : 1.0f / samples_;
+}
+
 // Lookup frame of the table for the frame's surface (step 5 of render(), and textures).
 LookupGeometry WaveOpticsMethod::lookup_geometry(const HeightField& hf, const SurfaceSamples& surface,
                                                  const std::vector<double>& depths) const {
@@ -461,6 +494,10 @@ CausticOutput WaveOpticsMethod::render(const FrameGeometry& frame, const RenderR
         return t;
     };
     const HeightField& hf = *frame.objects.at(static_cast<std::size_t>(water_index_)).heightfield;
+    // 0. The wavelength for this surface (the propagators are rebuilt only when it changes).
+    const double lambda = wavelength_for(stats_for(hf));
+    if (lambda != lambda_) build_spectral(lambda);
+    out.health.add("wavelength_um", std::llround(1e6 * lambda_));
     // 1. The surface on the FFT grid, periodic (tapered if its edges do not match), mean level removed.
     const SurfaceSamples& surface = table_->resample(hf, lx_, ly_);
     if (!surface.periodic) out.health.add("nonperiodic_surface", 1);
