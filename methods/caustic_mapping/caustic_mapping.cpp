@@ -1,4 +1,4 @@
-// caustic_mapping: Shah, Konttinen, Pattanaik 2007 (shared/papers/000), on the shared software raster.
+// caustic_mapping: Shah, Konttinen, Pattanaik 2007 (docs/papers.md), on the shared software raster.
 // Per frame, as the paper's render passes (Sec. III.B):
 //   1. receivers (diffuse objects) -> positions texture from the light (map x map; a six-face cube map
 //      for point lights whose receivers leave one frustum, Sec. III.F);

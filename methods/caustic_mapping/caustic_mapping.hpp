@@ -1,6 +1,6 @@
 #pragma once
 // caustic_mapping: Shah, Konttinen, Pattanaik, "Caustics Mapping: An Image-space Technique for Real-time
-// Caustics" (2007; shared/papers/000). Internal interface shared by the plugin's translation units.
+// Caustics" (2007; docs/papers.md). Internal interface shared by the plugin's translation units.
 #include <cstdint>
 #include <memory>
 #include <string>

@@ -1,4 +1,4 @@
-// caustic_triangles: the area-ratio method of Stam, "Periodic Caustic Textures" (shared/papers/004):
+// caustic_triangles: the area-ratio method of Stam, "Periodic Caustic Textures" (docs/papers.md):
 // refract every vertex of the water surface grid, intersect the refracted rays with the receiver and
 // shade each surface triangle's image with irradiance = (flux through the surface triangle) / (area of
 // its image). "The intensity is proportional to the area of the triangle" (ibid.), made radiometric:
