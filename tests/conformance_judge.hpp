@@ -4,7 +4,7 @@
 // parameters (or those CAUSTICS_CONFORMANCE_PARAMS sets) on the scene's receiver; the no-caustic
 // baseline is the flat interface's irradiance for
 // water, the best constant for a solid refractor:
-//   - capabilities() may refuse the case, with a reason; nothing else is then asked;
+//   - capabilities() (decide_capability, as runs decide) may refuse the case, with a reason; nothing else is then asked;
 //   - the output is finite (and, with `full`, bitwise identical for 1 and 2 threads and across renders);
 //   - where the truth is flat (ior = 1, flat water) the map is flat: std/mean < 1 % over the lit bins;
 //   - inside the regime accuracy_claim() states: nrmse against the truth (after the least-squares scale
@@ -31,6 +31,7 @@
 #include <caustics/reference/analytic_truth.hpp>
 #include <caustics/run/metrics.hpp>
 #include <caustics/run/run_errors.hpp>
+#include <caustics/run/run_record.hpp>
 
 namespace caustics::test_support {
 
@@ -117,7 +118,7 @@ inline std::vector<Rendered> render_case(const MethodInfo& info, const std::map<
 // and update, no render); a refused scene gives an outside claim with the refusal as its reason.
 inline AccuracyClaim claim_only(const MethodInfo& info, const Scene& scene) {
     std::unique_ptr<Method> method = info.create(ParamSet::resolve(info.name, info.params, conformance_overrides(info)));
-    const Capability cap = method->capabilities(scene);
+    const Capability cap = decide_capability(*method, scene);
     if (!cap.supported) return AccuracyClaim::outside("refused: " + cap.reason);
     const FrameGeometry frame = build_frame_geometry(scene, 0);
     method->prepare(scene);
@@ -169,7 +170,7 @@ inline JudgedRow judge_case(const MethodInfo& info, const std::string& case_name
     const ParamSet defaults = ParamSet::resolve(info.name, info.params, overrides);
     {
         const std::unique_ptr<Method> probe = info.create(defaults);
-        const Capability cap = probe->capabilities(scene);
+        const Capability cap = decide_capability(*probe, scene);
         if (!cap.supported) {
             EXPECT_FALSE(cap.reason.empty()) << info.name << " refuses " << case_name << " without a reason";
             row.refused = true;

@@ -102,7 +102,7 @@ TEST(Media, MethodsWithoutAVolumeViewAreSkippedWithTheReason) {
         const Capability v = method->volume_capability(sf.scene());
         if (v.supported) continue;
         const RenderRun run = run_method(sf, m, options, {});
-        EXPECT_EQ(run.status, "skipped") << info->name;
+        EXPECT_EQ(run.status, RunStatus::Skipped) << info->name;
         // A method that refuses media itself says so; one that does not is refused by the run, which
         // names the medium and the method's own reason.
         if (method->capabilities(sf.scene()).supported) {
@@ -170,7 +170,7 @@ TEST(Media, TheVolumeViewIsMeasuredAgainstTheReferenceAndWritten) {
     options.beauty = false;
     options.truth = "reference";
     const RenderRun run = run_method(sf, m, options, [&]() -> const ReferenceResult* { return &ref; });
-    ASSERT_EQ(run.status, "ok") << run.message;
+    ASSERT_EQ(run.status, RunStatus::Ok) << run.message;
     const auto& e = run.metrics["error"]["camera_volume"];
     EXPECT_NEAR(e["nrmse"].get<double>(), std::sqrt(1.5), 1e-6);
     EXPECT_NEAR(e["nrmse_net"].get<double>(), std::sqrt(1.5), 1e-6);

@@ -87,7 +87,7 @@ TEST(RunMeasures, TruthAndFrameTimeAreRecorded) {
     } cache{::testing::TempDir() + "caustics_run_measures_cache_" + std::to_string(::getpid())};
     o.cache_dir = cache.path;
     const RenderRun analytic = run_render(o);
-    ASSERT_EQ(analytic.status, "ok") << analytic.message;
+    ASSERT_EQ(analytic.status, caustics::RunStatus::Ok) << analytic.message;
     const auto& m = analytic.metrics;
     EXPECT_EQ(m["truth"]["kind"], "analytic:sine");
     EXPECT_EQ(m["truth"]["noise_nrmse"].get<double>(), 0.0);
@@ -114,7 +114,7 @@ TEST(RunMeasures, TruthAndFrameTimeAreRecorded) {
     o.no_reference = true;
     o.truth = "auto";
     const RenderRun pool = run_render(o);
-    ASSERT_EQ(pool.status, "ok") << pool.message;
+    ASSERT_EQ(pool.status, caustics::RunStatus::Ok) << pool.message;
     const auto& p = pool.metrics;
     EXPECT_EQ(p["frame_time"], "update+render");
     EXPECT_GT(p["frame_ms"]["median"].get<double>(), p["time_ms"]["median"].get<double>());

@@ -67,17 +67,15 @@ TEST(SweepWorker, LoadedFrameIsReusedForTheSameSceneFrameOnly) {
     o.threads = 2;
     const json alone = caustics::run_render(o).metrics;
     caustics::LoadedFrame kept;
-    caustics::keep_loaded_frame(&kept);
-    const json first = caustics::run_render(o).metrics;
+    const json first = caustics::run_render(o, &kept).metrics;
     const caustics::SceneFrame* frame = kept.frame.get();
     ASSERT_NE(frame, nullptr);
     o.overrides = {{"grid", "32"}};
-    const json second = caustics::run_render(o).metrics;
+    const json second = caustics::run_render(o, &kept).metrics;
     EXPECT_EQ(kept.frame.get(), frame) << "the same scene frame was built again";
     o.frame = 1;
-    (void)caustics::run_render(o);
+    (void)caustics::run_render(o, &kept);
     EXPECT_NE(kept.scene_key.find("\n1"), std::string::npos) << kept.scene_key;
-    caustics::keep_loaded_frame(nullptr);
     json a = alone, b = first;
     for (const std::string& key : kTimingKeys) {
         a.erase(key);

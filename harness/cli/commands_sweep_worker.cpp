@@ -10,6 +10,7 @@
 #include "command.hpp"
 #include "dispatch.hpp"
 #include "options.hpp"
+#include "render_command.hpp"
 #include <caustics/run/render_run.hpp>
 #include <caustics/sweep/worker.hpp>
 #include <caustics/util/errors.hpp>
@@ -17,28 +18,18 @@
 namespace caustics::cli {
 namespace {
 
-const Command& render_command() {
-    static const Command command = [] {
-        for (const Command& c : registered_commands())
-            if (c.name == "render") return c;
-        throw std::logic_error("sweep-worker: no render command is registered");
-    }();
-    return command;
-}
-
 // One run: `argv` parsed by a fresh `render` command exactly as main() parses a `caustics render` command
 // line (dispatch.hpp: the same error lines and exit codes, 2 bad input, 1 internal failure). The options'
 // "valid" texts are forgotten with the parser, whose options they are keyed by.
-int render_one(const std::vector<std::string>& argv) {
+int render_one(const std::vector<std::string>& argv, LoadedFrame* kept) {
     struct ForgetValidTexts {
         ~ForgetValidTexts() { forget_valid_texts(); }
     } forget;   // destroyed after the parser below
     try {
         CLI::App app{"", "caustics"};
         app.require_subcommand(1, 1);
-        const Command& command = render_command();
-        CLI::App* sub = app.add_subcommand(command.name, command.summary);
-        const std::vector<ParsedCommand> commands = {{sub, command.setup(*sub)}};
+        CLI::App* sub = app.add_subcommand(kRenderName, kRenderSummary);
+        const std::vector<ParsedCommand> commands = {{sub, setup_render(*sub, kept)}};
         std::vector<const char*> args = {"caustics"};
         for (const std::string& a : argv) args.push_back(a.c_str());
         return parse_and_run(app, commands, static_cast<int>(args.size()), args.data());
@@ -58,10 +49,7 @@ Command make_sweep_worker_command() {
         app.group("");   // hidden from --help
         return []() {
             LoadedFrame kept;
-            keep_loaded_frame(&kept);
-            const int code = serve_sweep_worker(render_one);
-            keep_loaded_frame(nullptr);
-            return code;
+            return serve_sweep_worker([&kept](const std::vector<std::string>& argv) { return render_one(argv, &kept); });
         };
     };
     return c;

@@ -23,6 +23,21 @@ json timing_json(const TimingSummary* t) {
             {"ci_rel", t->has_interval ? json_number(t->ci_rel) : json(nullptr)}};
 }
 
+void timing_to_json(const RunTiming& t, json& j) {
+    j["time_ms"] = timing_json(&t.render);
+    j["frame_ms"] = timing_json(&t.frame);
+    j["frame_time"] = t.animated ? "update+render" : "render";
+    j["fps"] = t.frame.median > 0.0 ? json_number(1000.0 / t.frame.median) : json(nullptr);
+    j["render_fps"] = t.render.median > 0.0 ? json_number(1000.0 / t.render.median) : json(nullptr);
+    j["noisy_timing"] = t.capped;
+    j["prepare_ms"] = json_number(t.prepare_ms);
+    j["update_ms"] = json_number(t.update_ms);
+    json stages = json::object();
+    for (const auto& [stage, ms] : t.stages_ms) stages[stage] = json_number(ms);
+    j["stages_ms"] = stages;
+    j["repeats"] = t.repeats;
+}
+
 json claim_json(const AccuracyClaim& claim) {
     json bounds = json::array();
     for (const RegimeBound& b : claim.bounds)

@@ -5,6 +5,7 @@
 #include <caustics/api/method.hpp>
 #include <caustics/run/render_options.hpp>
 #include <caustics/run/resolved_method.hpp>
+#include <caustics/run/run_record.hpp>
 #include <caustics/run/scene_frame.hpp>
 #include <caustics/util/timing.hpp>
 
@@ -15,6 +16,10 @@ nlohmann::json json_number(double v);
 
 // metrics.json's timing block of one timed section (all null for none).
 nlohmann::json timing_json(const TimingSummary* t);
+
+// The timed region's keys of metrics.json (time_ms, frame_ms, frame_time, fps, render_fps, noisy_timing,
+// prepare_ms, update_ms, stages_ms, repeats) from the typed record.
+void timing_to_json(const RunTiming& t, nlohmann::json& j);
 
 // metrics.json's claim block: inside, max_error (the stated absolute nrmse), bound (the error the run is held
 // to once the baseline's is known: null until then), reason (outside only), bounds (the regime's quantities

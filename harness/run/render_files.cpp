@@ -13,7 +13,7 @@ void write_render_outputs(const std::string& dir, const SceneFrame& sf, const Re
                           const RenderOptions& options) {
     fs::create_directories(dir);
     const fs::path d(dir);
-    if (run.status != "skipped") {
+    if (run.status != RunStatus::Skipped) {
         const CausticOutput& out = run.output;
         if (!out.receiver.empty()) write_exr(out.receiver, (d / "receiver.exr").string());
         if (!out.receiver_rgb.empty()) write_exr(out.receiver_rgb, (d / "receiver_rgb.exr").string());

@@ -24,6 +24,7 @@
 #include <caustics/run/metrics_json.hpp>
 #include <caustics/run/render_options.hpp>
 #include <caustics/run/resolved_method.hpp>
+#include <caustics/run/run_record.hpp>
 #include <caustics/run/run_reference.hpp>
 #include <caustics/run/scene_frame.hpp>
 #include <caustics/run/thread_limit.hpp>
@@ -31,10 +32,14 @@
 namespace caustics {
 
 
+// One run's record: the typed decisions and timings (run_record.hpp), and the metrics.json document they are
+// serialised into with the error blocks (docs/design.md section 7).
 struct RenderRun {
-    std::string status;            // "ok", "skipped" (unsupported scene), "unstable" (non-finite output)
-    std::string message;
-    nlohmann::json metrics;        // the metrics.json document (docs/design.md section 7)
+    RunStatus status = RunStatus::Ok;
+    std::string message;           // every note of the run, "; "-separated
+    RunTiming timing;              // supported runs only
+    AccuracyClaim claim;           // supported runs only
+    nlohmann::json metrics;        // the metrics.json document
     CausticOutput output;          // the last timed render's output
     bool have_reference = false;   // error values were measured against a reference
 };
@@ -53,13 +58,14 @@ RenderRun run_method(const SceneFrame& sf, const ResolvedMethod& method, const R
 void write_render_outputs(const std::string& dir, const SceneFrame& sf, const RenderRun& run,
                           const RenderOptions& options);
 
-// The whole `caustics render`: every InputError is thrown before anything is written.
-RenderRun run_render(const RenderOptions& options);
+struct LoadedFrame;
+// The whole `caustics render`: every InputError is thrown before anything is written. `kept` (may be null):
+// the scene frame and reference a process that renders many runs keeps between them (below).
+RenderRun run_render(const RenderOptions& options, LoadedFrame* kept = nullptr);
 
 // What a process that renders many runs in sequence (the sweep worker, sweep/worker.hpp) keeps between
 // them: the scene frame of its last run (by resolved scene path and frame) and the reference of its last
-// reference settings and cache folder. run_render uses the store installed with keep_loaded_frame and
-// loads, builds or reads only what differs from the last run. The results are the same as a fresh
+// reference settings and cache folder. run_render, given one, loads, builds or reads only what differs from the last run. The results are the same as a fresh
 // process's: the scene frame is built from the same file by the same deterministic code, and a cached
 // reference is rebuilt from the integer sums the cache stores (reference.hpp), the same values every time
 // it is read. A scene file edited while the store holds it is not noticed: a sweep fixes its scenes'
@@ -70,7 +76,5 @@ struct LoadedFrame {
     std::string reference_key;             // reference settings and cache folder
     std::unique_ptr<ReferenceResult> reference;
 };
-// Installs the store run_render uses (nullptr: none, the default); the caller owns it.
-void keep_loaded_frame(LoadedFrame* store);
 
 }  // namespace caustics

@@ -11,20 +11,17 @@
 #include <caustics/util/errors.hpp>
 #include <caustics/util/statistics.hpp>
 #include <caustics/util/timing.hpp>
+#include <caustics/run/run_record.hpp>
 
 namespace caustics::view {
 namespace {
 
-// As run_method decides (render_run.cpp): capabilities, and volume_capability on a scattering scene.
+// The decision runs make (run/run_record.hpp): capabilities, and volume_capability on a scattering scene.
 MethodChoice choice_for(const MethodInfo& info, const Scene& scene) {
     MethodChoice c{info.name, true, {}};
     try {
         const std::unique_ptr<Method> m = info.create(ParamSet::resolve(info.name, info.params, {}));
-        Capability cap = m->capabilities(scene);
-        if (cap.supported && scene_scatters(scene)) {
-            const Capability v = m->volume_capability(scene);
-            if (!v.supported) cap = Capability::no("the scene's medium scatters: " + v.reason);
-        }
+        const Capability cap = decide_capability(*m, scene);
         c.supported = cap.supported;
         c.reason = cap.reason;
     } catch (const std::exception& e) {

@@ -1,0 +1,57 @@
+#pragma once
+// The typed record of one run (run_method, render_run.hpp): what the harness decided and measured, kept as
+// data until metrics.json is written (metrics_json.hpp serialises it at the edge).
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <caustics/api/method.hpp>
+#include <caustics/run/render_options.hpp>
+#include <caustics/run/scene_frame.hpp>
+#include <caustics/util/timing.hpp>
+
+namespace caustics {
+
+enum class RunStatus {
+    Ok,         // rendered with finite output
+    Skipped,    // the method does not support the scene (Capability::no)
+    Unstable,   // rendered, with non-finite output: its error is not measured
+};
+// "ok", "skipped", "unstable" (metrics.json's and results.csv's status).
+const char* status_name(RunStatus status);
+
+// Whether `method` renders `scene`: its capabilities, and on a scene whose medium scatters also its
+// volume_capability (volume caustics, the camera_volume view, and extinction along every caustic path: only
+// a method that models the medium is measured on it). The one decision runs, sweeps and the viewer share.
+Capability decide_capability(const Method& method, const Scene& scene);
+
+// The timed region (docs/design.md section 6): prepare, update, the warm-up renders untimed, then timed
+// frames until the timing policy stops.
+struct RunTiming {
+    TimingSummary render;                      // render() per frame
+    TimingSummary frame;                       // update + render (animated scenes) or render
+    bool animated = false;                     // the frame's geometry changes: update() is timed per frame
+    bool capped = false;                       // stopped by the time cap before the median was precise
+    double prepare_ms = 0.0;
+    double update_ms = 0.0;                    // median per frame (animated) or the one update
+    std::map<std::string, double> stages_ms;   // the method's stages, median per frame
+    int repeats = 0;                           // timed frames
+};
+
+// Times `method` on the frame; `last` receives the last timed render's output (the previous one is freed
+// outside the timed region).
+RunTiming time_method(Method& method, const SceneFrame& sf, const RenderRequest& request, const RenderOptions& options,
+                      CausticOutput& last);
+
+// The output's shape and finiteness: the harness counts non-finite values itself (never averaged in) and
+// names views the method did not produce. Throws when an image has the wrong size.
+struct OutputCheck {
+    std::int64_t nonfinite = 0;          // receiver, covered camera pixels, camera_volume
+    bool unstable = false;               // non-finite values, or the method's own `nonfinite` counter
+    std::vector<std::string> messages;   // non-finite output, missing views
+};
+OutputCheck check_output(const CausticOutput& out, const SceneFrame& sf, const std::string& method, bool volume);
+
+}  // namespace caustics
