@@ -32,6 +32,7 @@
 #include <caustics/run/metrics.hpp>
 #include <caustics/run/run_errors.hpp>
 #include <caustics/run/run_record.hpp>
+#include <caustics/run/view_table.hpp>
 
 namespace caustics::test_support {
 
@@ -39,6 +40,7 @@ struct JudgedRow {
     std::string method, test_case, claim;
     bool refused = false, inside = false, flat_truth = false;
     double error = NAN, error_2x = NAN, baseline = NAN, bound = NAN, max_error = NAN, flat = NAN;
+    std::map<std::string, ViewErrors> views;   // every view the output holds a truth for (run/view_table.hpp)
     int grid = 0;
     AccuracyClaim stated;
 };
@@ -187,7 +189,8 @@ inline JudgedRow judge_case(const MethodInfo& info, const std::string& case_name
         EXPECT_LT(flatness(truth.receiver, truth.receiver), 1e-3) << "the case's truth is not flat";
     }
     // What drawing no caustic scores: the flat interface's irradiance, or the best constant (solids).
-    const Image baseline = make_baseline(flat_interface_baseline(frame, chart), truth.receiver).map;
+    const Image flat = flat_interface_baseline(frame, chart);
+    const Image baseline = make_baseline(flat, truth.receiver).map;
 
     const std::vector<Rendered> two = render_case(info, overrides, scene, frame, chart, 2, 1);
     const Image& m = two[0].out.receiver;
@@ -205,6 +208,10 @@ inline JudgedRow judge_case(const MethodInfo& info, const std::string& case_name
     row.stated = claim;
 
     const bool radiometric = info.radiometric_at(defaults);
+    // Every view the output holds, measured as runs measure them (a further registered view included).
+    const ViewSources sources{&scene, &frame, &chart, nullptr, nullptr, &truth, &flat};
+    EXPECT_EQ(check_views(two[0].out, sources, info.name), 0) << "non-finite values in a view";
+    for (EvaluatedView& v : evaluate_views(two[0].out, sources, radiometric)) row.views[v.spec->name] = std::move(v.errors);
     const ErrorMetrics e = compare_images(m, truth.receiver, !radiometric);
     const ErrorMetrics eb = compare_images(baseline, truth.receiver, !radiometric);
     row.error = radiometric ? e.nrmse : e.nrmse_fit;
@@ -235,7 +242,7 @@ inline JudgedRow judge_case(const MethodInfo& info, const std::string& case_name
     // A flat truth is what the flat baseline draws (its error is 0 up to float rounding): no multiple of it
     // can be asked for, and those cases are judged by flatness and flux instead.
     if (!flat_truth) {
-        EXPECT_LE(row.error, row.bound) << info.name << " on " << case_name << ": nrmse " << row.error << ", baseline "
+        EXPECT_TRUE(judge_claim(claim, row.error, row.baseline).met) << info.name << " on " << case_name << ": nrmse " << row.error << ", baseline "
                                         << row.baseline << ", claimed nrmse " << claim.max_error;
     }
     if (radiometric) {

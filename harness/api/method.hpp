@@ -132,6 +132,7 @@ struct CausticOutput {
     // part of it. Every pixel is read.
     Image camera_volume;
     std::map<std::string, Image> debug;                  // optional: caustic map, overlays
+    std::map<std::string, Image> views;                  // further views, keyed by their view-table row name
     std::vector<std::pair<std::string, double>> stages_ms;  // optional per-stage timings of render()
     Health health;
 };

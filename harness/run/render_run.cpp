@@ -9,7 +9,6 @@
 #include <vector>
 
 #include <caustics/reference/analytic_truth.hpp>
-#include <caustics/frame/baseline.hpp>
 #include <caustics/run/beauty.hpp>
 #include <caustics/util/errors.hpp>
 #include <caustics/util/image_io.hpp>
@@ -17,6 +16,7 @@
 #include <caustics/run/metrics_json.hpp>
 #include <caustics/api/registry.hpp>
 #include <caustics/run/run_errors.hpp>
+#include <caustics/run/view_table.hpp>
 #include <caustics/scene/scene_catalog.hpp>
 #include <caustics/util/timing.hpp>
 
@@ -26,28 +26,11 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-// The volume view against the reference's, over every pixel, with the constant baseline (the mean
-// radiance over the pixels the reference lights: no caustic structure) as the bar to clear.
-void measure_volume_view(const Image& method, const ReferenceResult& reference, bool radiometric, nlohmann::json& j,
-                         std::vector<std::string>& messages) {
-    const TruthMaps truth{&reference.camera_volume, &reference.camera_volume_replicas, &reference.camera_volume_stderr};
-    const Baseline baseline = make_baseline(Image{}, reference.camera_volume);
-    const ViewErrors e = measure_view(method, truth, nullptr, radiometric, &baseline.map);
-    j["error"]["camera_volume"] = e.json;
-    j["baseline_volume"] = {{"kind", baseline.kind}, {"error", e.have_baseline ? json_number(e.baseline_error) : nlohmann::json(nullptr)}};
-    if (e.net.valid && e.have_baseline && e.no_better_than_flat)
-        messages.push_back("camera_volume: no better than the constant baseline");
-}
-
 std::string join_messages(const std::vector<std::string>& parts) {
     std::string s;
     for (const auto& p : parts) s += (s.empty() ? "" : "; ") + p;
     return s;
 }
-
-}  // namespace
-
-namespace {
 
 std::unique_ptr<Method> create_method(const ResolvedMethod& m) {
     try {
@@ -66,55 +49,43 @@ std::string noisy_timing_message(const RunTiming& t, const RenderOptions& option
            std::to_string(100.0 * options.timing_precision).substr(0, 4) + " %)";
 }
 
-// The receiver's truth: the analytic closed form where the scene has one (truth auto or analytic), else
-// the Monte Carlo reference (its kind in metrics.json's `truth`).
-TruthMaps receiver_truth(const AnalyticTruth& analytic, const ReferenceResult& reference, json& j) {
-    j["truth"] = {{"kind", analytic.available ? analytic.kind : std::string("reference")},
-                  {"noise_nrmse", analytic.available ? json(0.0) : json_number(reference.noise_nrmse)}};
-    return analytic.available ? TruthMaps{&analytic.receiver, nullptr, nullptr}
-                              : TruthMaps{&reference.receiver, &reference.receiver_replicas, &reference.receiver_stderr};
+// metrics.json's `truth`: the primary view's (the receiver's) truth, the analytic closed form where the scene
+// has one (truth auto or analytic), else the Monte Carlo reference.
+json truth_json(const AnalyticTruth& analytic, const ReferenceResult& reference) {
+    return {{"kind", analytic.available ? analytic.kind : std::string("reference")},
+            {"noise_nrmse", analytic.available ? json(0.0) : json_number(reference.noise_nrmse)}};
 }
 
-// The receiver map against its truth, with the flat-interface baseline and the claim's judgement.
-void judge_receiver(const SceneFrame& sf, bool radiometric, const CausticOutput& out, const TruthMaps& truth,
-                    const AccuracyClaim& claim, json& j, std::vector<std::string>& messages) {
-    if (out.receiver.empty()) return;
-    const Baseline baseline = make_baseline(flat_interface_baseline(sf.geometry(), sf.chart()), *truth.mean);
-    const ViewErrors e = measure_view(out.receiver, truth, nullptr, radiometric, &baseline.map);
-    j["error"]["receiver"] = e.json;
-    // Only a noisy truth can hide an error; against a closed form the question does not arise.
-    if (e.net.valid && !truth.exact()) j["below_reference_noise"] = e.net.includes_zero;
-    j["baseline"] = {{"kind", baseline.kind}, {"error", e.have_baseline ? json_number(e.baseline_error) : json(nullptr)}};
-    // Judged like the conformance suite: the plain error (after the fit where not radiometric) against the
-    // claimed bound (the stated nrmse or half the baseline's, the smaller); exact truths only (a noisy one
-    // is judged by the net error's interval, which the report shows), and only where there is a caustic to
-    // judge (a flat interface within 0.1 % of the truth leaves no multiple of its error to ask).
-    if (claim.inside && e.have_baseline && truth.exact() && e.baseline_error > 1e-3) {
-        const char* key = radiometric ? "nrmse" : "nrmse_fit";
-        j["claim"]["bound"] = json_number(claim.bound(e.baseline_error));
-        if (e.json.contains(key) && e.json[key].is_number())
-            j["claim"]["met"] = e.json[key].get<double>() <= claim.bound(e.baseline_error);
+// Every measured view's errors, its baseline's, and on the primary view the claim's judgement.
+void judge_views(const std::vector<EvaluatedView>& views, const AccuracyClaim& claim, bool radiometric, json& j,
+                 std::vector<std::string>& messages) {
+    for (const EvaluatedView& v : views) {
+        const ViewSpec& spec = *v.spec;
+        const ViewErrors& e = v.errors;
+        j["error"][spec.name] = e.json;
+        if (v.has_baseline && !spec.baseline_key.empty())
+            j[spec.baseline_key] = {{"kind", v.baseline_kind},
+                                    {"error", e.have_baseline ? json_number(e.baseline_error) : json(nullptr)}};
+        if (spec.primary) {
+            // Only a noisy truth can hide an error; against a closed form the question does not arise.
+            if (e.net.valid && !v.exact_truth) j["below_reference_noise"] = e.net.includes_zero;
+            // Judged like the conformance suite: the plain error (after the fit where not radiometric)
+            // against the claimed bound (the stated nrmse or half the baseline's, the smaller); exact truths
+            // only (a noisy one is judged by the net error's interval, which the report shows), and only
+            // where there is a caustic to judge (a flat interface within 0.1 % of the truth leaves no
+            // multiple of its error to ask).
+            if (claim.inside && e.have_baseline && v.exact_truth && e.baseline_error > 1e-3) {
+                const char* key = radiometric ? "nrmse" : "nrmse_fit";
+                j["claim"]["bound"] = json_number(claim.bound(e.baseline_error));
+                if (e.json.contains(key) && e.json[key].is_number())
+                    j["claim"]["met"] = judge_claim(claim, e.json[key].get<double>(), e.baseline_error).met;
+            }
+            if (e.net.valid && e.have_baseline) j["no_better_than_flat"] = e.no_better_than_flat;
+        }
+        if (e.net.valid && e.have_baseline && e.no_better_than_flat && spec.no_better_note)
+            messages.push_back(spec.no_better_note(v.baseline_kind));
+        if (e.samples == 0 && !spec.empty_note.empty()) messages.push_back(spec.empty_note);
     }
-    if (e.net.valid && e.have_baseline) {
-        j["no_better_than_flat"] = e.no_better_than_flat;
-        if (e.no_better_than_flat) messages.push_back("no better than the no-caustic baseline (" + baseline.kind + ")");
-    }
-}
-
-// The camera views against the reference's (the camera is always measured against the reference).
-void judge_camera(const SceneFrame& sf, bool radiometric, const CausticOutput& out, const ReferenceResult& reference,
-                  json& j, std::vector<std::string>& messages) {
-    if (!out.camera.empty() && !reference.camera.empty()) {
-        std::vector<std::uint8_t> mask = sf.gbuffer().covered;
-        if (reference.camera_covered.size() == mask.size())
-            for (std::size_t p = 0; p < mask.size(); ++p) mask[p] &= reference.camera_covered[p];
-        const TruthMaps camera_truth{&reference.camera, &reference.camera_replicas, &reference.camera_stderr};
-        const ViewErrors e = measure_view(out.camera, camera_truth, &mask, radiometric, nullptr);
-        j["error"]["camera"] = e.json;
-        if (e.samples == 0) messages.push_back("camera view: no pixel's primary hit is a diffuse receiver");
-    }
-    if (!out.camera_volume.empty() && !reference.camera_volume.empty())
-        measure_volume_view(out.camera_volume, reference, radiometric, j, messages);
 }
 
 }  // namespace
@@ -137,11 +108,10 @@ RenderRun run_method(const SceneFrame& sf, const ResolvedMethod& m, const Render
 
     // Timed regions: prepare, update, each repeat of render (and of update where the scene is animated).
     // Nothing else (docs/design.md section 6).
-    const bool volume = scene_scatters(sf.scene());
     RenderRequest request;
     request.receiver = &sf.chart();
     request.camera = &sf.gbuffer();
-    request.camera_volume = volume;
+    request.camera_volume = scene_scatters(sf.scene());
     run.timing = time_method(*method, sf, request, options, run.output);
     timing_to_json(run.timing, j);
     std::vector<std::string> messages;
@@ -149,7 +119,7 @@ RenderRun run_method(const SceneFrame& sf, const ResolvedMethod& m, const Render
 
     // Output shape and health: non-finite values are counted by the harness too and never averaged in.
     const CausticOutput& out = run.output;
-    const OutputCheck check = check_output(out, sf, info.name, volume);
+    const OutputCheck check = check_output(out, sf, info.name);
     json health = json::object();
     for (const auto& [name, value] : out.health.counters) health[name] = value;
     health["nonfinite_pixels"] = check.nonfinite;
@@ -170,11 +140,11 @@ RenderRun run_method(const SceneFrame& sf, const ResolvedMethod& m, const Render
         if (options.truth != "reference") analytic = analytic_truth(sf.geometry(), sf.chart());
         if (options.truth == "analytic" && !analytic.available)
             messages.push_back("no analytic truth (" + analytic.reason + "): measured against the reference");
-        const TruthMaps truth = receiver_truth(analytic, *reference, j);
+        j["truth"] = truth_json(analytic, *reference);
         const bool radiometric = info.radiometric_at(m.params);
         if (!check.unstable) {
-            judge_receiver(sf, radiometric, out, truth, run.claim, j, messages);
-            judge_camera(sf, radiometric, out, *reference, j, messages);
+            const ViewSources sources = view_sources(sf, reference, &analytic);
+            judge_views(evaluate_views(out, sources, radiometric), run.claim, radiometric, j, messages);
             if (!radiometric) messages.push_back("not radiometric: nrmse_fit/fit_scale are after a least-squares scale fit");
         }
     } else {

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <stdexcept>
 
-#include <caustics/frame/receiver_chart.hpp>
 
 namespace caustics {
 
@@ -15,17 +14,6 @@ const char* status_name(RunStatus status) {
     case RunStatus::Unstable: return "unstable";
     }
     return "?";
-}
-
-Capability decide_capability(const Method& method, const Scene& scene) {
-    Capability cap = method.capabilities(scene);
-    if (cap.supported && scene_scatters(scene)) {
-        const Capability v = method.volume_capability(scene);
-        if (!v.supported)
-            cap = Capability::no("the scene's medium scatters (volume caustics, camera_volume, and extinction along "
-                                 "every path): " + v.reason);
-    }
-    return cap;
 }
 
 RunTiming time_method(Method& method, const SceneFrame& sf, const RenderRequest& request, const RenderOptions& options,
@@ -79,45 +67,15 @@ RunTiming time_method(Method& method, const SceneFrame& sf, const RenderRequest&
     return t;
 }
 
-namespace {
-
-std::int64_t count_nonfinite(const Image& image, const std::vector<std::uint8_t>* mask) {
-    std::int64_t n = 0;
-    const std::size_t pixels = static_cast<std::size_t>(image.width) * image.height;
-    for (std::size_t p = 0; p < pixels; ++p) {
-        if (mask && !(*mask)[p]) continue;
-        for (int c = 0; c < image.channels; ++c)
-            if (!std::isfinite(image.pixels[p * image.channels + c])) ++n;
-    }
-    return n;
-}
-
-void check_size(const Image& image, int w, int h, const std::string& method, const std::string& what) {
-    if (image.empty()) return;
-    if (image.width != w || image.height != h || image.channels != 1)
-        throw std::runtime_error("method " + method + " returned a " + what + " image of " +
-                                 std::to_string(image.width) + "x" + std::to_string(image.height) + "x" +
-                                 std::to_string(image.channels) + ", expected " + std::to_string(w) + "x" +
-                                 std::to_string(h) + "x1");
-}
-
-}  // namespace
-
-OutputCheck check_output(const CausticOutput& out, const SceneFrame& sf, const std::string& method, bool volume) {
-    const CameraGBuffer& g = sf.gbuffer();
-    check_size(out.receiver, sf.chart().width(), sf.chart().height(), method, "receiver");
-    check_size(out.camera, g.width, g.height, method, "camera");
-    check_size(out.camera_volume, g.width, g.height, method, "camera_volume");
+OutputCheck check_output(const CausticOutput& out, const SceneFrame& sf, const std::string& method) {
     OutputCheck c;
-    c.nonfinite = count_nonfinite(out.receiver, nullptr) + count_nonfinite(out.camera, &g.covered) +
-                  count_nonfinite(out.camera_volume, nullptr);
+    c.nonfinite = check_views(out, view_sources(sf, nullptr, nullptr), method);
     c.unstable = c.nonfinite > 0 || out.health.get("nonfinite") > 0;
     if (c.unstable)
         c.messages.push_back("non-finite output (" + std::to_string(c.nonfinite) + " pixels, method counter " +
                              std::to_string(out.health.get("nonfinite")) + "): error not measured");
-    if (out.receiver.empty()) c.messages.push_back("method produced no receiver map");
-    if (out.camera.empty()) c.messages.push_back("method produced no camera view");
-    if (volume && out.camera_volume.empty()) c.messages.push_back("method produced no camera_volume view");
+    for (const ViewSpec* v : requested_views(sf.scene()))
+        if (!v->output(out) && !v->missing_note.empty()) c.messages.push_back(v->missing_note);
     return c;
 }
 

@@ -10,6 +10,7 @@
 #include <caustics/api/method.hpp>
 #include <caustics/run/render_options.hpp>
 #include <caustics/run/scene_frame.hpp>
+#include <caustics/run/view_table.hpp>
 #include <caustics/util/timing.hpp>
 
 namespace caustics {
@@ -21,11 +22,6 @@ enum class RunStatus {
 };
 // "ok", "skipped", "unstable" (metrics.json's and results.csv's status).
 const char* status_name(RunStatus status);
-
-// Whether `method` renders `scene`: its capabilities, and on a scene whose medium scatters also its
-// volume_capability (volume caustics, the camera_volume view, and extinction along every caustic path: only
-// a method that models the medium is measured on it). The one decision runs, sweeps and the viewer share.
-Capability decide_capability(const Method& method, const Scene& scene);
 
 // The timed region (docs/design.md section 6): prepare, update, the warm-up renders untimed, then timed
 // frames until the timing policy stops.
@@ -45,13 +41,14 @@ struct RunTiming {
 RunTiming time_method(Method& method, const SceneFrame& sf, const RenderRequest& request, const RenderOptions& options,
                       CausticOutput& last);
 
-// The output's shape and finiteness: the harness counts non-finite values itself (never averaged in) and
-// names views the method did not produce. Throws when an image has the wrong size.
+// The output's shape and finiteness over the view table's rows (view_table.hpp): the harness counts
+// non-finite values itself (never averaged in) and names requested views the method did not produce.
+// Throws when an image has the wrong size.
 struct OutputCheck {
-    std::int64_t nonfinite = 0;          // receiver, covered camera pixels, camera_volume
+    std::int64_t nonfinite = 0;          // over the pixels each view reads
     bool unstable = false;               // non-finite values, or the method's own `nonfinite` counter
     std::vector<std::string> messages;   // non-finite output, missing views
 };
-OutputCheck check_output(const CausticOutput& out, const SceneFrame& sf, const std::string& method, bool volume);
+OutputCheck check_output(const CausticOutput& out, const SceneFrame& sf, const std::string& method);
 
 }  // namespace caustics

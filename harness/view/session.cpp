@@ -11,12 +11,12 @@
 #include <caustics/util/errors.hpp>
 #include <caustics/util/statistics.hpp>
 #include <caustics/util/timing.hpp>
-#include <caustics/run/run_record.hpp>
+#include <caustics/run/view_table.hpp>
 
 namespace caustics::view {
 namespace {
 
-// The decision runs make (run/run_record.hpp): capabilities, and volume_capability on a scattering scene.
+// The decision runs make (run/view_table.hpp): the method's capabilities and every requested view's.
 MethodChoice choice_for(const MethodInfo& info, const Scene& scene) {
     MethodChoice c{info.name, true, {}};
     try {
@@ -29,12 +29,6 @@ MethodChoice choice_for(const MethodInfo& info, const Scene& scene) {
         c.reason = e.what();
     }
     return c;
-}
-
-bool any_nonfinite(const Image& im, const std::vector<std::uint8_t>* mask) {
-    for (std::size_t i = 0; i < im.pixels.size(); ++i)
-        if (!std::isfinite(im.pixels[i]) && (!mask || (*mask)[i / static_cast<std::size_t>(im.channels)])) return true;
-    return false;
 }
 
 }  // namespace
@@ -174,20 +168,6 @@ const Image* Session::receiver_truth_stderr() const {
     return reference_ ? &reference_->receiver_stderr : nullptr;
 }
 
-// The no-caustic baseline (run_errors.hpp) of the current frame and truth, made once per truth: the
-// flat interface's map, or the best constant over the truth's lit bins.
-const Image& Session::baseline_for(const Image& truth, std::uint64_t photons) {
-    if (baseline_key_ != std::make_pair(frame_index_, photons) || baseline_.empty()) {
-        if (flat_.empty() || flat_frame_ != frame_index_) {
-            flat_ = flat_interface_baseline(frame_->geometry(), frame_->chart());
-            flat_frame_ = frame_index_;
-        }
-        baseline_ = make_baseline(flat_, truth).map;
-        baseline_key_ = {frame_index_, photons};
-    }
-    return baseline_;
-}
-
 void Session::refresh_errors(bool force) {
     if (progressive_) reference_ = progressive_->latest();
     const std::uint64_t photons = reference_ ? reference_->photons : 0;
@@ -201,38 +181,32 @@ void Session::refresh_errors(bool force) {
     errors_ = {};
     status_ = "ok";
     if (!rendered_) return;
-    const CameraGBuffer& g = frame_->gbuffer();
-    if (any_nonfinite(output_.receiver, nullptr) || any_nonfinite(output_.camera, &g.covered) ||
-        any_nonfinite(output_.camera_volume, nullptr) || output_.health.get("nonfinite") > 0) {
+    // The run's checks and evaluation (run/view_table.hpp), against the newest reference.
+    if (check_views(output_, view_sources(*frame_, nullptr, nullptr), method_name()) > 0 || output_.health.get("nonfinite") > 0) {
         status_ = "unstable: non-finite output, error not measured";
         return;
     }
+    if (flat_.empty() || flat_frame_ != frame_index_) {   // the no-caustic baseline's expensive part, once per frame
+        flat_ = flat_interface_baseline(frame_->geometry(), frame_->chart());
+        flat_frame_ = frame_index_;
+    }
+    const ViewSources sources = view_sources(*frame_, reference_.get(), &analytic_, &flat_);
     const bool radiometric = params_->info().radiometric_at(params_->params());
-    if (analytic_.available && !output_.receiver.empty()) {
-        errors_.receiver = measure_view(output_.receiver, TruthMaps{&analytic_.receiver, nullptr, nullptr}, nullptr,
-                                        radiometric, &baseline_for(analytic_.receiver, 0));
-        errors_.truth_kind = analytic_.kind;
+    for (EvaluatedView& v : evaluate_views(output_, sources, radiometric)) {
+        if (v.spec->primary) errors_.truth_kind = v.truth_kind;
+        errors_.by_view[v.spec->name] = std::move(v.errors);
     }
-    if (!reference_) return;
-    errors_.photons = reference_->photons;
-    const ReferenceResult& r = *reference_;
-    if (!analytic_.available && !output_.receiver.empty()) {
-        errors_.receiver = measure_view(output_.receiver, TruthMaps{&r.receiver, &r.receiver_replicas, &r.receiver_stderr},
-                                        nullptr, radiometric, &baseline_for(r.receiver, r.photons));
-        errors_.truth_kind = "reference";
+    const auto view = [&](const char* name) -> std::optional<ViewErrors> {
+        const auto it = errors_.by_view.find(name);
+        return it == errors_.by_view.end() ? std::nullopt : std::optional<ViewErrors>(it->second);
+    };
+    errors_.receiver = view("receiver");
+    errors_.camera = view("camera");
+    errors_.volume = view("camera_volume");
+    if (reference_) {
+        errors_.photons = reference_->photons;
+        if (errors_.truth_kind.empty()) errors_.truth_kind = "reference";
     }
-    if (!output_.camera.empty() && !r.camera.empty()) {
-        std::vector<std::uint8_t> mask = g.covered;
-        if (r.camera_covered.size() == mask.size())
-            for (std::size_t p = 0; p < mask.size(); ++p) mask[p] &= r.camera_covered[p];
-        errors_.camera = measure_view(output_.camera, TruthMaps{&r.camera, &r.camera_replicas, &r.camera_stderr}, &mask,
-                                      radiometric, nullptr);
-    }
-    if (!output_.camera_volume.empty() && !r.camera_volume.empty())
-        errors_.volume = measure_view(output_.camera_volume,
-                                      TruthMaps{&r.camera_volume, &r.camera_volume_replicas, &r.camera_volume_stderr},
-                                      nullptr, radiometric, nullptr);
-    if (errors_.truth_kind.empty()) errors_.truth_kind = "reference";
 }
 
 }  // namespace caustics::view

@@ -50,7 +50,8 @@ struct RenderTiming {
 // Errors of the last render against the current truth (run_errors.hpp measure_view: net of the
 // reference's noise where the truth is Monte Carlo).
 struct LiveErrors {
-    std::optional<ViewErrors> receiver, camera, volume;
+    std::map<std::string, ViewErrors> by_view;   // every measured view, by view-table row name
+    std::optional<ViewErrors> receiver, camera, volume;   // the built-in rows' (volume: camera_volume)
     std::string truth_kind;         // "analytic:sine", "reference" or "" (none yet)
     std::uint64_t photons = 0;      // of the reference the errors were measured against
 };
@@ -109,7 +110,6 @@ public:
 private:
     void make_method();
     void start_reference();
-    const Image& baseline_for(const Image& truth, std::uint64_t photons);
     SessionOptions options_;
     std::unique_ptr<SceneFrame> frame_;
     int frame_index_ = 0;
@@ -135,9 +135,8 @@ private:
     LiveErrors errors_;
     std::uint64_t generation_ = 1, measured_generation_ = 0, measured_photons_ = 0;
     double measured_at_s_ = -1.0;
-    Image flat_, baseline_;
+    Image flat_;   // flat_interface_baseline of frame flat_frame_
     int flat_frame_ = -1;
-    std::pair<int, std::uint64_t> baseline_key_{-1, 0};
 };
 
 }  // namespace caustics::view

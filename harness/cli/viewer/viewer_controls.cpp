@@ -9,6 +9,7 @@
 #include <GLFW/glfw3.h>
 #include <imgui.h>
 
+#include <caustics/run/view_table.hpp>
 #include <caustics/util/errors.hpp>
 #include <caustics/view/record.hpp>
 
@@ -87,9 +88,10 @@ void Viewer::controls() {
     const view::LiveErrors& e = s.errors();
     ImGui::Text("truth: %s", e.truth_kind.empty() ? "(none yet)" : e.truth_kind.c_str());
     if (s.status() != "ok") ImGui::TextColored(ImVec4(1, 0.4f, 0.4f, 1), "%s", s.status().c_str());
-    error_line("receiver", e.receiver);
-    error_line("camera", e.camera);
-    if (!s.output().camera_volume.empty()) error_line("volume", e.volume);
+    for (const ViewSpec* v : requested_views(s.scene())) {   // the view table's rows the scene asks for
+        const auto it = e.by_view.find(v->name);
+        error_line(v->name.c_str(), it == e.by_view.end() ? std::nullopt : std::optional<ViewErrors>(it->second));
+    }
     const view::ProgressiveStatus st = s.reference_status();
     ImGui::Text("reference %.3g / %.3g photons%s", static_cast<double>(st.photons), static_cast<double>(st.target),
                 st.from_cache ? " (cache)" : "");
