@@ -279,6 +279,50 @@ std::string results_csv(const std::set<std::string>& param_names, const std::vec
     return out;
 }
 
+namespace {
+
+// The `caustics render` command line of one planned run (its reference read from the shared cache).
+std::vector<std::string> render_argv(const SweepSpec& spec, const PlannedRun& run, const SweepOptions& options,
+                                     const std::string& program, const std::string& cache, const fs::path& run_dir) {
+    std::vector<std::string> argv = {program, "render", run.scene_path, "--method", run.method,
+                                     "--frame", std::to_string(run.frame), "--out", run_dir.string(),
+                                     "--warmup", std::to_string(spec.warmup), "--repeats", std::to_string(spec.repeats),
+                                     "--timing-precision", number_text(spec.timing_precision),
+                                     "--max-time", number_text(spec.timing_max_s), "--truth", run.truth,
+                                     "--threads", std::to_string(options.threads), "--cache", cache};
+    ReferenceSettings asked = spec.reference;
+    asked.noise_target = run.noise_target;
+    for (std::string& a : reference_arguments(asked)) argv.push_back(std::move(a));
+    for (const auto& [k, v] : run.params) {
+        argv.push_back("--set");
+        argv.push_back(k + "=" + v);
+    }
+    return argv;
+}
+
+// The run's row: its metrics.json, or a bare row saying how the child ended.
+json row_of_child(const ChildResult& child, const PlannedRun& run, const fs::path& run_dir, const std::string& log,
+                  double timeout) {
+    json row;
+    const fs::path metrics_path = run_dir / "metrics.json";
+    if (child.exit_code == 0 && fs::exists(metrics_path)) {
+        std::ifstream in(metrics_path);
+        row = json::parse(in, nullptr, false);
+        if (row.is_discarded()) row = bare_row(run, "failed", "metrics.json unreadable");
+    } else if (child.timed_out) {
+        row = bare_row(run, "failed", "timed out after " + std::to_string(timeout) + " s");
+    } else if (child.signal) {
+        row = bare_row(run, "failed", std::string("crashed: ") + strsignal(child.signal) + " (" + last_line_of(log) + ")");
+    } else if (child.exit_code == 2) {
+        row = bare_row(run, "skipped", last_line_of(log));   // the method rejected the parameters
+    } else {
+        row = bare_row(run, "failed", "exit code " + std::to_string(child.exit_code) + ": " + last_line_of(log));
+    }
+    return row;
+}
+
+}  // namespace
+
 SweepSummary run_sweep(const SweepOptions& options) {
     const SweepSpec spec = load_sweep_spec(options.spec_path, options.axis_overrides);   // at most kMaxSweepRuns
     const std::uint64_t planned = count_runs(spec);
@@ -375,19 +419,7 @@ SweepSummary run_sweep(const SweepOptions& options) {
             prepare_reference(spec, run, options, cache, dir / "references" / ref_key);
         }
 
-        std::vector<std::string> argv = {program, "render", run.scene_path, "--method", run.method,
-                                         "--frame", std::to_string(run.frame), "--out", run_dir.string(),
-                                         "--warmup", std::to_string(spec.warmup), "--repeats", std::to_string(spec.repeats),
-                                         "--timing-precision", number_text(spec.timing_precision),
-                                         "--max-time", number_text(spec.timing_max_s), "--truth", run.truth,
-                                         "--threads", std::to_string(options.threads), "--cache", cache};
-        ReferenceSettings asked = spec.reference;
-        asked.noise_target = run.noise_target;
-        for (std::string& a : reference_arguments(asked)) argv.push_back(std::move(a));
-        for (const auto& [k, v] : run.params) {
-            argv.push_back("--set");
-            argv.push_back(k + "=" + v);
-        }
+        const std::vector<std::string> argv = render_argv(spec, run, options, program, cache, run_dir);
         const std::string log = (run_dir / "log.txt").string();
         if (options.progress) {
             const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -399,21 +431,7 @@ SweepSummary run_sweep(const SweepOptions& options) {
         const ChildResult child = worker ? worker->run(std::vector<std::string>(argv.begin() + 1, argv.end()), log, timeout)
                                          : run_child(argv, log, timeout);
 
-        json row;
-        const fs::path metrics_path = run_dir / "metrics.json";
-        if (child.exit_code == 0 && fs::exists(metrics_path)) {
-            std::ifstream in(metrics_path);
-            row = json::parse(in, nullptr, false);
-            if (row.is_discarded()) row = bare_row(run, "failed", "metrics.json unreadable");
-        } else if (child.timed_out) {
-            row = bare_row(run, "failed", "timed out after " + std::to_string(timeout) + " s");
-        } else if (child.signal) {
-            row = bare_row(run, "failed", std::string("crashed: ") + strsignal(child.signal) + " (" + last_line_of(log) + ")");
-        } else if (child.exit_code == 2) {
-            row = bare_row(run, "skipped", last_line_of(log));   // the method rejected the parameters
-        } else {
-            row = bare_row(run, "failed", "exit code " + std::to_string(child.exit_code) + ": " + last_line_of(log));
-        }
+        json row = row_of_child(child, run, run_dir, log, timeout);
         row["run_id"] = run.id;
         row["scene"] = run.scene_name;
         const std::string status = row.value("status", "failed");

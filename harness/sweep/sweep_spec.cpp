@@ -295,38 +295,23 @@ std::vector<json> expand_axis_values(const json& value, const std::string& file,
     return out;
 }
 
-SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string>& axis_overrides) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw InputError(path, "", "cannot read sweep spec (missing or unreadable file)");
-    std::stringstream buffer;
-    buffer << in.rdbuf();
-    // nlohmann keeps the last of duplicate keys silently; a duplicated axis is almost always a mistake in a
-    // hand-written spec, so parse_json_strict rejects it with the key path (and nesting past kMaxJsonDepth).
-    json root = parse_json_strict(buffer.str(), path);
-    if (!root.is_object())
-        throw InputError(path, "", "must be a JSON object with the keys scenes and methods (and optionally description, "
-                                   "frames, reference, truth, timing, report), not " + describe_json(root));
-    check_keys(root, {"description", "scenes", "frames", "reference", "truth", "timing", "methods", "report"}, path, "");
-    const auto require_number = [&](const json& v, const std::string& key, double lo, double hi) {
-        if (!v.is_number() || !(v.get<double>() >= lo && v.get<double>() <= hi))
-            throw InputError(path, key, "must be a number in [" + json(lo).dump() + ", " + json(hi).dump() + "]");
-        return v.get<double>();
-    };
-    const auto require_truth = [&](const json& v, const std::string& key) {
-        if (!v.is_string() || (v != "auto" && v != "analytic" && v != "reference"))
-            throw InputError(path, key, "must be \"auto\", \"analytic\" or \"reference\"");
-        return v.get<std::string>();
-    };
+namespace {
 
-    // "all" is expanded first, so that --axis, the checks below and the manifest's spec as run see every
-    // method's axes as if they were written out.
-    if (root.contains("methods") && !root["methods"].is_object()) {
-        if (root["methods"] != "all")
-            throw InputError(path, "methods", "must be \"all\" (every registered method at the sweep values its "
-                                              "parameter table declares) or an object {method: {axis: values}}");
-        root["methods"] = every_method_axes(path);
-    }
-    // Command-line axes replace or add axes before validation, so they are checked like the file.
+double require_number(const json& v, const std::string& path, const std::string& key, double lo, double hi) {
+    if (!v.is_number() || !(v.get<double>() >= lo && v.get<double>() <= hi))
+        throw InputError(path, key, "must be a number in [" + json(lo).dump() + ", " + json(hi).dump() + "]");
+    return v.get<double>();
+}
+
+std::string require_truth(const json& v, const std::string& path, const std::string& key) {
+    if (!v.is_string() || (v != "auto" && v != "analytic" && v != "reference"))
+        throw InputError(path, key, "must be \"auto\", \"analytic\" or \"reference\"");
+    return v.get<std::string>();
+}
+
+// Command-line axes (METHOD.AXIS=VALUES) written into the spec's methods, replacing or adding axes, so that
+// they are checked like the file's.
+void apply_axis_overrides(json& root, const std::vector<std::string>& axis_overrides) {
     std::set<std::string> overridden;
     for (const auto& text : axis_overrides) {
         const auto eq = text.find('='), dot = text.find('.');
@@ -352,17 +337,11 @@ SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string
         root["methods"][method][axis] = values;
     }
 
-    SweepSpec spec;
-    spec.path = path;
-    spec.as_run = root;
-    if (root.contains("report")) check_report(root["report"], path);
-    if (root.contains("description")) {
-        if (!root["description"].is_string()) throw InputError(path, "description", "must be a string");
-        spec.description = root["description"].get<std::string>();
-    }
-    if (root.contains("truth")) spec.truth = require_truth(root["truth"], "truth");
-    std::vector<int> default_frames{0};
-    if (root.contains("frames")) default_frames = parse_frames(root["frames"], path, "frames");
+}
+
+// The scenes list: each entry once (by file and by run-id name), every frame within its animation.
+std::vector<SweepScene> parse_scenes(const json& root, const std::string& path, const std::vector<int>& default_frames) {
+    std::vector<SweepScene> scenes;
     if (!root.contains("scenes") || !root["scenes"].is_array() || root["scenes"].empty())
         throw InputError(path, "scenes", "must be a non-empty list of scene names or paths");
     std::map<std::string, std::size_t> scene_files;   // identity -> index of its entry
@@ -379,8 +358,8 @@ SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string
             scene.path = resolve_scene(entry["scene"].get<std::string>(), path, key + ".scene");
             scene.frames = entry.contains("frames") ? parse_frames(entry["frames"], path, key + ".frames") : default_frames;
             if (entry.contains("noise_target"))
-                scene.noise_target = require_number(entry["noise_target"], key + ".noise_target", 0.0, 10.0);
-            if (entry.contains("truth")) scene.truth = require_truth(entry["truth"], key + ".truth");
+                scene.noise_target = require_number(entry["noise_target"], path, key + ".noise_target", 0.0, 10.0);
+            if (entry.contains("truth")) scene.truth = require_truth(entry["truth"], path, key + ".truth");
         } else {
             throw InputError(path, key, "must be a scene name or path, or {\"scene\": NAME, \"frames\": [...]}");
         }
@@ -397,7 +376,7 @@ SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string
         const auto same_name = scene_names.find(safe_token(name));
         if (same_name != scene_names.end())
             throw InputError(path, key, "scene name '" + name + "' (" + scene.path + ") is also the name of scenes[" +
-                                            std::to_string(same_name->second) + "] (" + spec.scenes[same_name->second].path +
+                                            std::to_string(same_name->second) + "] (" + scenes[same_name->second].path +
                                             "); run ids and reference folders are named after the scene: rename one file");
         scene_files.emplace(file_identity(scene.path), i);
         scene_names.emplace(safe_token(name), i);
@@ -412,41 +391,47 @@ SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string
                                          std::to_string(loaded.animation.frames) + " frame(s): valid 0 to " +
                                          std::to_string(loaded.animation.frames - 1) + ")");
         }
-        spec.scenes.push_back(std::move(scene));
+        scenes.push_back(std::move(scene));
     }
-    if (root.contains("reference")) {
-        const json& r = root["reference"];
-        if (!r.is_object()) throw InputError(path, "reference", "must be an object {\"photons\": N, \"seed\": S}");
-        check_keys(r, {"photons", "seed", "noise_target", "photon_cap", "sampler", "replicas"}, path, "reference");
-        using RS = ReferenceSettings;
-        ReferenceSettings& s = spec.reference;
-        if (r.contains("noise_target")) s.noise_target = require_number(r["noise_target"], "reference.noise_target", 0.0, RS::kMaxNoiseTarget);
-        if (r.contains("photon_cap"))
-            s.photon_cap = static_cast<std::uint64_t>(require_integer(r["photon_cap"], path, "reference.photon_cap", RS::kMinPhotons, RS::kMaxPhotons));
-        if (r.contains("replicas")) s.replicas = static_cast<int>(require_integer(r["replicas"], path, "reference.replicas", RS::kMinReplicas, RS::kMaxReplicas));
-        if (r.contains("sampler") && (!r["sampler"].is_string() || !parse_sampler(r["sampler"].get<std::string>(), s.sampler)))
-            throw InputError(path, "reference.sampler", "must be \"sobol\" or \"independent\"");
-        if (r.contains("photons")) s.photons = static_cast<std::uint64_t>(require_integer(r["photons"], path, "reference.photons", RS::kMinPhotons, RS::kMaxPhotons));
-        if (r.contains("seed")) s.seed = static_cast<std::uint64_t>(require_integer(r["seed"], path, "reference.seed", 0, RS::kMaxSeed));
-        if (s.photon_cap < s.photons)
-            throw InputError(path, "reference.photon_cap",
-                             "is " + std::to_string(s.photon_cap) + ", below reference.photons " + std::to_string(s.photons) +
-                                 ": the cap must be at least the first round's photons");
+    return scenes;
+}
+
+void parse_reference(const json& r, const std::string& path, ReferenceSettings& s) {
+    if (!r.is_object()) throw InputError(path, "reference", "must be an object {\"photons\": N, \"seed\": S}");
+    check_keys(r, {"photons", "seed", "noise_target", "photon_cap", "sampler", "replicas"}, path, "reference");
+    using RS = ReferenceSettings;
+    if (r.contains("noise_target")) s.noise_target = require_number(r["noise_target"], path, "reference.noise_target", 0.0, RS::kMaxNoiseTarget);
+    if (r.contains("photon_cap"))
+        s.photon_cap = static_cast<std::uint64_t>(require_integer(r["photon_cap"], path, "reference.photon_cap", RS::kMinPhotons, RS::kMaxPhotons));
+    if (r.contains("replicas")) s.replicas = static_cast<int>(require_integer(r["replicas"], path, "reference.replicas", RS::kMinReplicas, RS::kMaxReplicas));
+    if (r.contains("sampler") && (!r["sampler"].is_string() || !parse_sampler(r["sampler"].get<std::string>(), s.sampler)))
+        throw InputError(path, "reference.sampler", "must be \"sobol\" or \"independent\"");
+    if (r.contains("photons")) s.photons = static_cast<std::uint64_t>(require_integer(r["photons"], path, "reference.photons", RS::kMinPhotons, RS::kMaxPhotons));
+    if (r.contains("seed")) s.seed = static_cast<std::uint64_t>(require_integer(r["seed"], path, "reference.seed", 0, RS::kMaxSeed));
+    if (s.photon_cap < s.photons)
+        throw InputError(path, "reference.photon_cap",
+                         "is " + std::to_string(s.photon_cap) + ", below reference.photons " + std::to_string(s.photons) +
+                             ": the cap must be at least the first round's photons");
+}
+
+void parse_timing(const json& t, const std::string& path, SweepSpec& spec) {
+    if (!t.is_object()) throw InputError(path, "timing", "must be an object {\"warmup\": W, \"repeats\": R}");
+    check_keys(t, {"warmup", "repeats", "timeout_s", "precision", "max_time_s"}, path, "timing");
+    if (t.contains("precision")) spec.timing_precision = require_number(t["precision"], path, "timing.precision", 0.001, 1.0);
+    if (t.contains("max_time_s")) spec.timing_max_s = require_number(t["max_time_s"], path, "timing.max_time_s", 0.0, 3600.0);
+    if (t.contains("warmup")) spec.warmup = static_cast<int>(require_integer(t["warmup"], path, "timing.warmup", 0, 10000));
+    if (t.contains("repeats")) spec.repeats = static_cast<int>(require_integer(t["repeats"], path, "timing.repeats", 1, 100000));
+    if (t.contains("timeout_s")) {
+        if (!t["timeout_s"].is_number() || t["timeout_s"].get<double>() < 0.0)
+            throw InputError(path, "timing.timeout_s", "must be a number of seconds >= 0 (0: no limit)");
+        spec.timeout_s = t["timeout_s"].get<double>();
     }
-    if (root.contains("timing")) {
-        const json& t = root["timing"];
-        if (!t.is_object()) throw InputError(path, "timing", "must be an object {\"warmup\": W, \"repeats\": R}");
-        check_keys(t, {"warmup", "repeats", "timeout_s", "precision", "max_time_s"}, path, "timing");
-        if (t.contains("precision")) spec.timing_precision = require_number(t["precision"], "timing.precision", 0.001, 1.0);
-        if (t.contains("max_time_s")) spec.timing_max_s = require_number(t["max_time_s"], "timing.max_time_s", 0.0, 3600.0);
-        if (t.contains("warmup")) spec.warmup = static_cast<int>(require_integer(t["warmup"], path, "timing.warmup", 0, 10000));
-        if (t.contains("repeats")) spec.repeats = static_cast<int>(require_integer(t["repeats"], path, "timing.repeats", 1, 100000));
-        if (t.contains("timeout_s")) {
-            if (!t["timeout_s"].is_number() || t["timeout_s"].get<double>() < 0.0)
-                throw InputError(path, "timing.timeout_s", "must be a number of seconds >= 0 (0: no limit)");
-            spec.timeout_s = t["timeout_s"].get<double>();
-        }
-    }
+}
+
+// The methods and their axes: known axes of registered methods, values of the parameter's type, each
+// once; the sweep's size is checked by arithmetic before any axis is expanded.
+std::vector<SweepMethod> parse_methods(const json& root, const std::string& path, const std::vector<SweepScene>& scenes) {
+    std::vector<SweepMethod> methods;
     if (!root.contains("methods") || !root["methods"].is_object() || root["methods"].empty())
         throw InputError(path, "methods", "must be \"all\" or a non-empty object {method: {axis: values}}");
     // First the size, by arithmetic on the axes: a sweep too large to plan is refused before any axis
@@ -459,7 +444,7 @@ SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string
         throw InputError(path, "methods." + name + "." + axis, "unknown axis; parameters of " + name + ": " + known);
     };
     std::uint64_t scene_frames = 0, runs_per_frame = 0;
-    for (const auto& scene : spec.scenes) scene_frames = saturating_add(scene_frames, scene.frames.size());
+    for (const auto& scene : scenes) scene_frames = saturating_add(scene_frames, scene.frames.size());
     for (const auto& [name, axes] : root["methods"].items()) {
         const MethodInfo& info = require_method(name, path + ": methods." + name);
         if (!axes.is_object()) throw InputError(path, "methods." + name, "must be an object {axis: values}");
@@ -498,8 +483,50 @@ SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string
             }
             m.axes.push_back(std::move(a));
         }
-        spec.methods.push_back(std::move(m));
+        methods.push_back(std::move(m));
     }
+    return methods;
+}
+
+}  // namespace
+
+SweepSpec load_sweep_spec(const std::string& path, const std::vector<std::string>& axis_overrides) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw InputError(path, "", "cannot read sweep spec (missing or unreadable file)");
+    std::stringstream buffer;
+    buffer << in.rdbuf();
+    // nlohmann keeps the last of duplicate keys silently; a duplicated axis is almost always a mistake in a
+    // hand-written spec, so parse_json_strict rejects it with the key path (and nesting past kMaxJsonDepth).
+    json root = parse_json_strict(buffer.str(), path);
+    if (!root.is_object())
+        throw InputError(path, "", "must be a JSON object with the keys scenes and methods (and optionally description, "
+                                   "frames, reference, truth, timing, report), not " + describe_json(root));
+    check_keys(root, {"description", "scenes", "frames", "reference", "truth", "timing", "methods", "report"}, path, "");
+    // "all" is expanded first, so that --axis, the checks below and the manifest's spec as run see every
+    // method's axes as if they were written out.
+    if (root.contains("methods") && !root["methods"].is_object()) {
+        if (root["methods"] != "all")
+            throw InputError(path, "methods", "must be \"all\" (every registered method at the sweep values its "
+                                              "parameter table declares) or an object {method: {axis: values}}");
+        root["methods"] = every_method_axes(path);
+    }
+    apply_axis_overrides(root, axis_overrides);
+
+    SweepSpec spec;
+    spec.path = path;
+    spec.as_run = root;
+    if (root.contains("report")) check_report(root["report"], path);
+    if (root.contains("description")) {
+        if (!root["description"].is_string()) throw InputError(path, "description", "must be a string");
+        spec.description = root["description"].get<std::string>();
+    }
+    if (root.contains("truth")) spec.truth = require_truth(root["truth"], path, "truth");
+    std::vector<int> default_frames{0};
+    if (root.contains("frames")) default_frames = parse_frames(root["frames"], path, "frames");
+    spec.scenes = parse_scenes(root, path, default_frames);
+    if (root.contains("reference")) parse_reference(root["reference"], path, spec.reference);
+    if (root.contains("timing")) parse_timing(root["timing"], path, spec);
+    spec.methods = parse_methods(root, path, spec.scenes);
     return spec;
 }
 

@@ -71,6 +71,30 @@ public:
 private:
     void draw_gbuffers(const FrameGeometry& frame, const Light& light, Counters& c, std::int64_t& clipped);
     void trace(const Scene& scene, const Light& light, Counters& total);
+    // One grid texel's light on its way through trace(): its flux, weight so far and current ray.
+    struct TracedTexel {
+        std::size_t i;
+        const Batch* batch;
+        double flux, weight;
+        glm::dvec3 v, origin, dir;
+        bool alive;
+    };
+    // A row's texels and the estimator's batches (scratch reused across rows).
+    struct TraceRow {
+        std::vector<TracedTexel> texels;
+        std::vector<EstimateRay> rays;
+        std::vector<EstimateResult> results;
+        std::vector<glm::dvec3> normals;
+        std::vector<std::size_t> which;
+    };
+    // Light carried by grid texel (x, y): E0 * texel area or I * texel solid angle.
+    double texel_flux(const Light& light, int x, int y) const;
+    // trace()'s passes over one row: the refraction (or reflection) at the front face of every covered
+    // texel, the exit points of closed dielectrics and the refraction out, the receiver points and the
+    // landing.
+    void enter_row(int y, const Scene& scene, const Light& light, double paper_scale, TraceRow& row, Counters& c) const;
+    void exit_row(const Scene& scene, TraceRow& row, Counters& c) const;
+    void land_row(TraceRow& row, Counters& c);
 
     Settings s_;
     std::vector<Batch> batches_;
@@ -187,17 +211,14 @@ void CausticMapping::draw_gbuffers(const FrameGeometry& frame, const Light& ligh
     (void)c;
 }
 
-void CausticMapping::trace(const Scene& scene, const Light& light, Counters& total) {
-    const int g = s_.grid;
+double CausticMapping::texel_flux(const Light& light, int x, int y) const {
     const bool point = light.type == LightType::Point;
     const double strength = point ? light.intensity : light.irradiance;
-    // Light carried by grid texel (x, y): E0 * texel area or I * texel solid angle.
-    auto texel_flux = [&](int x, int y) {
-        return strength * (point ? object_view_.texel_solid_angle(x + 0.5, y + 0.5) : object_view_.texel_area());
-    };
-    auto light_dir = [&](const glm::dvec3& v) {
-        return point ? glm::normalize(v - light.position) : glm::normalize(light.direction);
-    };
+    return strength * (point ? object_view_.texel_solid_angle(x + 0.5, y + 0.5) : object_view_.texel_area());
+}
+
+void CausticMapping::trace(const Scene& scene, const Light& light, Counters& total) {
+    const int g = s_.grid;
     // Eq. 6 needs V (covered texels) and, to carry units, the total flux through them.
     double paper_scale = 0.0;
     if (s_.flux == FluxWeight::Paper) {
@@ -207,163 +228,164 @@ void CausticMapping::trace(const Scene& scene, const Light& light, Counters& tot
             for (int x = 0; x < g; ++x)
                 if (front_.id[front_.index(x, y)] >= 0) {
                     ++covered;
-                    sum += texel_flux(x, y);
+                    sum += texel_flux(light, x, y);
                 }
         paper_scale = covered > 0 ? sum / static_cast<double>(covered) : 0.0;
     }
     landing_.assign(static_cast<std::size_t>(g) * g, FaceSplat{0, {glm::vec2(0.0f), 0.0f}});
     tbb::combinable<Counters> counters;
-    const Scene* sc = &scene;
     // A row at a time, in passes: the refraction at the front face of every covered texel, then the exit
     // points' estimates of the whole row (four rays at once: estimator_lanes.hpp), the refraction out,
     // the receiver points' estimates, and the landing. Each texel's operations are those of one texel at
     // a time, in the same order; only the counters (integer sums) are added in another order.
-    struct Pending {
-        std::size_t i;
-        const Batch* batch;
-        double flux, weight;
-        glm::dvec3 v, origin, dir;
-        bool alive;
-    };
     tbb::parallel_for(tbb::blocked_range<int>(0, g, 4), [&](const tbb::blocked_range<int>& rows) {
         Counters& c = counters.local();
-        std::vector<Pending> row;
-        std::vector<EstimateRay> rays;
-        std::vector<EstimateResult> results;
-        std::vector<glm::dvec3> normals;
-        std::vector<std::size_t> which;
-        row.reserve(static_cast<std::size_t>(g));
+        TraceRow row;
+        row.texels.reserve(static_cast<std::size_t>(g));
         for (int y = rows.begin(); y != rows.end(); ++y) {
-            row.clear();
-            for (int x = 0; x < g; ++x) {
-                const std::size_t i = front_.index(x, y);
-                const int id = front_.id[i];
-                if (id < 0) continue;
-                ++c.covered;
-                const Batch& b = batches_[static_cast<std::size_t>(id)];
-                const Material& mat = *b.material;
-                const glm::dvec3 v(front_.position[i]);
-                glm::dvec3 n(front_.normal[i]);
-                const glm::dvec3 L = light_dir(v);
-                if (b.role != Role::DoubleSurface && glm::dot(n, L) > 0.0) n = -n;   // open surfaces: either side
-                double weight = 1.0, cos_i = -glm::dot(L, n), cos_t = 0.0;
-                if (!(cos_i > 0.0)) {   // interpolated normal facing away at a silhouette
-                    ++c.grazing;
-                    continue;
-                }
-                const double flux = s_.flux == FluxWeight::Paper ? paper_scale * cos_i : texel_flux(x, y);
-                glm::dvec3 dir;
-                if (b.role == Role::Mirror) {
-                    dir = L + 2.0 * cos_i * n;
-                } else {
-                    if (!refract(L, n, 1.0 / mat.ior, dir, cos_i, cos_t)) {
-                        ++c.tir;
-                        continue;
-                    }
-                    if (sc->fresnel) weight *= fresnel_t(cos_i, cos_t, 1.0, mat.ior);
-                }
-                row.push_back({i, &b, flux, weight, v, v, dir, true});
-            }
-            // Exit points: the same estimator against the back-face texture, started from the
-            // front-to-back distance of each texel (Wyman's d_V).
-            rays.clear();
-            which.clear();
-            for (std::size_t k = 0; k < row.size(); ++k) {
-                const Pending& t = row[k];
-                if (t.batch->role != Role::DoubleSurface) continue;
-                double start = s_.estimator.d0;
-                if (back_tex_.maps[0].id[t.i] >= 0) start = glm::length(glm::dvec3(back_tex_.maps[0].position[t.i]) - t.v);
-                rays.push_back({t.v, t.dir, start});
-                which.push_back(k);
-            }
-            results.resize(rays.size());
-            normals.resize(rays.size());   // the back face's normal at each exit point (the estimate's last lookup)
-            estimate_rays(back_tex_, s_.estimator, rays.data(), rays.size(), results.data(), normals.data());
-            for (std::size_t e_k = 0; e_k < which.size(); ++e_k) {
-                Pending& t = row[which[e_k]];
-                const EstimateResult& e = results[e_k];
-                const glm::dvec3& ne = normals[e_k];
-                const Material& mat = *t.batch->material;
-                c.lookups += e.lookups;
-                c.oscillating += e.oscillating, c.bisection += e.bisected, c.bad_derivative += e.bad_derivative;
-                c.not_converged += !e.converged;
-                t.alive = false;
-                if (!e.hit) {
-                    ++c.null_exit;
-                    c.nonfinite += e.nonfinite;
-                    continue;
-                }
-                const double inside = glm::length(e.point - t.v);
-                if (s_.absorption && mat.absorption > 0.0) t.weight *= std::exp(-mat.absorption * inside);   // Eq. 7
-                const glm::dvec3 N = glm::dot(t.dir, ne) > 0.0 ? -ne : ne;
-                glm::dvec3 out_dir;
-                double cos_i = 0.0, cos_t = 0.0;
-                if (!refract(t.dir, N, mat.ior, out_dir, cos_i, cos_t)) {
-                    ++c.tir;
-                    continue;
-                }
-                if (sc->fresnel) t.weight *= fresnel_t(cos_i, cos_t, mat.ior, 1.0);
-                t.origin = e.point;
-                t.dir = out_dir;
-                t.alive = true;
-            }
-            // Receiver points.
-            rays.clear();
-            which.clear();
-            for (std::size_t k = 0; k < row.size(); ++k) {
-                if (!row[k].alive) continue;
-                rays.push_back({row[k].origin, row[k].dir, s_.estimator.d0});
-                which.push_back(k);
-            }
-            results.resize(rays.size());
-            estimate_rays(receivers_, s_.estimator, rays.data(), rays.size(), results.data(), nullptr);
-            for (std::size_t e_k = 0; e_k < which.size(); ++e_k) {
-                const Pending& t = row[which[e_k]];
-                const EstimateResult& e = results[e_k];
-                const glm::dvec3 &origin = t.origin, &dir = t.dir;
-                double weight = t.weight;
-                c.lookups += e.lookups;
-                c.oscillating += e.oscillating, c.bisection += e.bisected, c.bad_derivative += e.bad_derivative;
-                c.not_converged += e.hit && !e.converged;
-                if (!e.hit) {
-                    // A null value outside the receivers' window: the window holds every receiver's
-                    // rectangle, so no light ray through the estimate meets a receiver; the light leaves
-                    // past the receivers' edges (as the exact mapping's rays beyond the floor do), which is
-                    // not a failure of the estimator. Inside the window a null value is a hole: lost.
-                    Texel where;
-                    if (e.null_value && !receivers_.locate(origin + e.d * dir, where)) {
-                        ++c.missed;
-                        continue;
-                    }
-                    c.null_value += e.null_value;
-                    c.nonfinite += e.nonfinite;
-                    continue;
-                }
-                // Single surfaces (water): attenuation between the surface and the receiver (Sec. III.E).
-                const Material& mat = *t.batch->material;
-                if (t.batch->role == Role::SingleSurface && s_.absorption && mat.absorption > 0.0)
-                    weight *= std::exp(-mat.absorption * glm::length(e.point - origin));
-                Texel where;
-                if (!receivers_.locate(e.point, where)) {
-                    ++c.lost_outside;
-                    continue;
-                }
-                {   // Landed on the extrapolated rim, off every receiver: counted, and still splatted so
-                    // that the footprints of the light landing just inside an edge stay whole.
-                    const GBuffer& rg = receivers_.maps[static_cast<std::size_t>(where.face)];
-                    const int tx = std::min(static_cast<int>(where.px), rg.width - 1), ty = std::min(static_cast<int>(where.py), rg.height - 1);
-                    if (rg.id[rg.index(tx, ty)] == kExtended) ++c.missed;
-                }
-                const float value = static_cast<float>(t.flux * weight);
-                if (!std::isfinite(value)) {
-                    ++c.nonfinite;
-                    continue;
-                }
-                landing_[t.i] = {where.face, {glm::vec2(static_cast<float>(where.px), static_cast<float>(where.py)), value}};
-            }
+            enter_row(y, scene, light, paper_scale, row, c);
+            exit_row(scene, row, c);
+            land_row(row, c);
         }
     });
     counters.combine_each([&](const Counters& c) { total.add(c); });
+}
+
+void CausticMapping::enter_row(int y, const Scene& scene, const Light& light, double paper_scale, TraceRow& row,
+                               Counters& c) const {
+    const bool point = light.type == LightType::Point;
+    row.texels.clear();
+    for (int x = 0; x < s_.grid; ++x) {
+        const std::size_t i = front_.index(x, y);
+        const int id = front_.id[i];
+        if (id < 0) continue;
+        ++c.covered;
+        const Batch& b = batches_[static_cast<std::size_t>(id)];
+        const Material& mat = *b.material;
+        const glm::dvec3 v(front_.position[i]);
+        glm::dvec3 n(front_.normal[i]);
+        const glm::dvec3 L = point ? glm::normalize(v - light.position) : glm::normalize(light.direction);
+        if (b.role != Role::DoubleSurface && glm::dot(n, L) > 0.0) n = -n;   // open surfaces: either side
+        double weight = 1.0, cos_i = -glm::dot(L, n), cos_t = 0.0;
+        if (!(cos_i > 0.0)) {   // interpolated normal facing away at a silhouette
+            ++c.grazing;
+            continue;
+        }
+        const double flux = s_.flux == FluxWeight::Paper ? paper_scale * cos_i : texel_flux(light, x, y);
+        glm::dvec3 dir;
+        if (b.role == Role::Mirror) {
+            dir = L + 2.0 * cos_i * n;
+        } else {
+            if (!refract(L, n, 1.0 / mat.ior, dir, cos_i, cos_t)) {
+                ++c.tir;
+                continue;
+            }
+            if (scene.fresnel) weight *= fresnel_t(cos_i, cos_t, 1.0, mat.ior);
+        }
+        row.texels.push_back({i, &b, flux, weight, v, v, dir, true});
+    }
+}
+
+void CausticMapping::exit_row(const Scene& scene, TraceRow& row, Counters& c) const {
+    // Exit points: the same estimator against the back-face texture, started from the front-to-back
+    // distance of each texel (Wyman's d_V).
+    row.rays.clear();
+    row.which.clear();
+    for (std::size_t k = 0; k < row.texels.size(); ++k) {
+        const TracedTexel& t = row.texels[k];
+        if (t.batch->role != Role::DoubleSurface) continue;
+        double start = s_.estimator.d0;
+        if (back_tex_.maps[0].id[t.i] >= 0) start = glm::length(glm::dvec3(back_tex_.maps[0].position[t.i]) - t.v);
+        row.rays.push_back({t.v, t.dir, start});
+        row.which.push_back(k);
+    }
+    row.results.resize(row.rays.size());
+    row.normals.resize(row.rays.size());   // the back face's normal at each exit point (the estimate's last lookup)
+    estimate_rays(back_tex_, s_.estimator, row.rays.data(), row.rays.size(), row.results.data(), row.normals.data());
+    for (std::size_t e_k = 0; e_k < row.which.size(); ++e_k) {
+        TracedTexel& t = row.texels[row.which[e_k]];
+        const EstimateResult& e = row.results[e_k];
+        const glm::dvec3& ne = row.normals[e_k];
+        const Material& mat = *t.batch->material;
+        c.lookups += e.lookups;
+        c.oscillating += e.oscillating, c.bisection += e.bisected, c.bad_derivative += e.bad_derivative;
+        c.not_converged += !e.converged;
+        t.alive = false;
+        if (!e.hit) {
+            ++c.null_exit;
+            c.nonfinite += e.nonfinite;
+            continue;
+        }
+        const double inside = glm::length(e.point - t.v);
+        if (s_.absorption && mat.absorption > 0.0) t.weight *= std::exp(-mat.absorption * inside);   // Eq. 7
+        const glm::dvec3 N = glm::dot(t.dir, ne) > 0.0 ? -ne : ne;
+        glm::dvec3 out_dir;
+        double cos_i = 0.0, cos_t = 0.0;
+        if (!refract(t.dir, N, mat.ior, out_dir, cos_i, cos_t)) {
+            ++c.tir;
+            continue;
+        }
+        if (scene.fresnel) t.weight *= fresnel_t(cos_i, cos_t, mat.ior, 1.0);
+        t.origin = e.point;
+        t.dir = out_dir;
+        t.alive = true;
+    }
+}
+
+void CausticMapping::land_row(TraceRow& row, Counters& c) {
+    row.rays.clear();
+    row.which.clear();
+    for (std::size_t k = 0; k < row.texels.size(); ++k) {
+        if (!row.texels[k].alive) continue;
+        row.rays.push_back({row.texels[k].origin, row.texels[k].dir, s_.estimator.d0});
+        row.which.push_back(k);
+    }
+    row.results.resize(row.rays.size());
+    estimate_rays(receivers_, s_.estimator, row.rays.data(), row.rays.size(), row.results.data(), nullptr);
+    for (std::size_t e_k = 0; e_k < row.which.size(); ++e_k) {
+        const TracedTexel& t = row.texels[row.which[e_k]];
+        const EstimateResult& e = row.results[e_k];
+        const glm::dvec3 &origin = t.origin, &dir = t.dir;
+        double weight = t.weight;
+        c.lookups += e.lookups;
+        c.oscillating += e.oscillating, c.bisection += e.bisected, c.bad_derivative += e.bad_derivative;
+        c.not_converged += e.hit && !e.converged;
+        if (!e.hit) {
+            // A null value outside the receivers' window: the window holds every receiver's rectangle, so
+            // no light ray through the estimate meets a receiver; the light leaves past the receivers'
+            // edges (as the exact mapping's rays beyond the floor do), which is not a failure of the
+            // estimator. Inside the window a null value is a hole: lost.
+            Texel where;
+            if (e.null_value && !receivers_.locate(origin + e.d * dir, where)) {
+                ++c.missed;
+                continue;
+            }
+            c.null_value += e.null_value;
+            c.nonfinite += e.nonfinite;
+            continue;
+        }
+        // Single surfaces (water): attenuation between the surface and the receiver (Sec. III.E).
+        const Material& mat = *t.batch->material;
+        if (t.batch->role == Role::SingleSurface && s_.absorption && mat.absorption > 0.0)
+            weight *= std::exp(-mat.absorption * glm::length(e.point - origin));
+        Texel where;
+        if (!receivers_.locate(e.point, where)) {
+            ++c.lost_outside;
+            continue;
+        }
+        {   // Landed on the extrapolated rim, off every receiver: counted, and still splatted so that the
+            // footprints of the light landing just inside an edge stay whole.
+            const GBuffer& rg = receivers_.maps[static_cast<std::size_t>(where.face)];
+            const int tx = std::min(static_cast<int>(where.px), rg.width - 1), ty = std::min(static_cast<int>(where.py), rg.height - 1);
+            if (rg.id[rg.index(tx, ty)] == kExtended) ++c.missed;
+        }
+        const float value = static_cast<float>(t.flux * weight);
+        if (!std::isfinite(value)) {
+            ++c.nonfinite;
+            continue;
+        }
+        landing_[t.i] = {where.face, {glm::vec2(static_cast<float>(where.px), static_cast<float>(where.py)), value}};
+    }
 }
 
 CausticOutput CausticMapping::render(const FrameGeometry& frame, const RenderRequest& request) {

@@ -76,16 +76,160 @@ std::vector<double> column_focus(const VolumeShape& s, const HeightField& hf, co
     return g;
 }
 
+// ln I over the cells integrated so far (the layers above the current one), sampled where a ray back
+// from a cell crosses a layer.
+struct LnField {
+    const VolumeShape& s;
+    const VolumeF& lap;
+    std::vector<double> ln;
+    std::vector<std::uint8_t> known;   // ln holds a water cell's value
+
+    LnField(const VolumeShape& shape, const VolumeF& laplacian)
+        : s(shape), lap(laplacian), ln(shape.size(), kLnFloor), known(shape.size(), 0) {}
+
+    // Bilinear sample of layer k at (x, y) over the known cells: false when they weigh too little.
+    bool sample(int k, double x, double y, double& out) const {
+        const double h = s.spacing;
+        const double fx = (x - s.origin.x) / h - 0.5, fy = (y - s.origin.y) / h - 0.5;
+        if (fx < -0.5 || fy < -0.5 || fx > s.nx - 0.5 || fy > s.ny - 0.5) return false;
+        const double cx = std::clamp(fx, 0.0, s.nx - 1.0), cy = std::clamp(fy, 0.0, s.ny - 1.0);
+        const int i0 = std::min(static_cast<int>(cx), s.nx - 1), j0 = std::min(static_cast<int>(cy), s.ny - 1);
+        const int i1 = std::min(i0 + 1, s.nx - 1), j1 = std::min(j0 + 1, s.ny - 1);
+        const double wx = cx - i0, wy = cy - j0;
+        const int ii[4] = {i0, i1, i0, i1}, jj[4] = {j0, j0, j1, j1};
+        const double ww[4] = {(1 - wx) * (1 - wy), wx * (1 - wy), (1 - wx) * wy, wx * wy};
+        double wsum = 0.0, l = 0.0;
+        for (int q = 0; q < 4; ++q) {
+            if (ww[q] <= 0.0) continue;
+            const std::size_t u = s.index(ii[q], jj[q], k);
+            if (!known[u]) return false;
+            wsum += ww[q];
+            l += ww[q] * ln[u];
+        }
+        if (wsum <= 0.0) return false;
+        out = l / wsum;
+        return true;
+    }
+
+    // Bilinear Laplacian of T on layer k at (x, y) (clamped to the box).
+    double laplacian(int k, double x, double y) const {
+        const double h = s.spacing;
+        const double cx = std::clamp((x - s.origin.x) / h - 0.5, 0.0, s.nx - 1.0);
+        const double cy = std::clamp((y - s.origin.y) / h - 0.5, 0.0, s.ny - 1.0);
+        const int i0 = std::min(static_cast<int>(cx), s.nx - 1), j0 = std::min(static_cast<int>(cy), s.ny - 1);
+        const int i1 = std::min(i0 + 1, s.nx - 1), j1 = std::min(j0 + 1, s.ny - 1);
+        const double wx = cx - i0, wy = cy - j0;
+        return (1 - wy) * ((1 - wx) * lap.at(i0, j0, k) + wx * lap.at(i1, j0, k)) +
+               wy * ((1 - wx) * lap.at(i0, j1, k) + wx * lap.at(i1, j1, k));
+    }
+};
+
+// Past-focus flags of one layer: with a focus map, the column minimum of the vertex focus depths,
+// min-filtered over the window the layer's light can enter through, moved down the mean ray; without
+// one, the whole layer once it is deeper than the first focus.
+class PastFocusFlags {
+public:
+    PastFocusFlags(const VolumeShape& s, const HeightField& hf, const TransportInput& in, glm::dvec2 run)
+        : s_(s), in_(in), run_(run), flags_(static_cast<std::size_t>(s.nx) * s.ny, 0) {
+        if (in.focus_map) {
+            col_focus_ = column_focus(s, hf, *in.focus_map);
+            filtered_.resize(col_focus_.size());
+            rowpass_.resize(col_focus_.size());
+        }
+        shallowest_ = in.focus_map ? *std::min_element(col_focus_.begin(), col_focus_.end()) : in.first_focus_depth;
+    }
+
+    // The flags of a layer `depth` below the interface's mean height, one per column.
+    const std::vector<std::uint8_t>& layer(double depth) {
+        std::fill(flags_.begin(), flags_.end(), std::uint8_t(depth >= shallowest_));
+        if (!in_.focus_map || depth < shallowest_) return flags_;
+        const double h = s_.spacing;
+        const int r = static_cast<int>(std::ceil((in_.spread * depth + h) / h));
+        tbb::parallel_for(0, s_.ny, [&](int j) {
+            std::vector<double> pre, suf;
+            const std::size_t row = static_cast<std::size_t>(j) * s_.nx;
+            min_filter_1d(&col_focus_[row], &rowpass_[row], s_.nx, 1, r, pre, suf);
+        });
+        tbb::parallel_for(0, s_.nx, [&](int i) {
+            std::vector<double> pre, suf;
+            min_filter_1d(&rowpass_[i], &filtered_[i], s_.ny, s_.nx, r, pre, suf);
+        });
+        const int sx = static_cast<int>(std::lround(run_.x * depth / h)), sy = static_cast<int>(std::lround(run_.y * depth / h));
+        tbb::parallel_for(0, s_.ny, [&](int j) {
+            for (int i = 0; i < s_.nx; ++i) {
+                const int fi = std::clamp(i - sx, 0, s_.nx - 1), fj = std::clamp(j - sy, 0, s_.ny - 1);
+                flags_[static_cast<std::size_t>(j) * s_.nx + i] = filtered_[static_cast<std::size_t>(fj) * s_.nx + fi] <= depth;
+            }
+        });
+        return flags_;
+    }
+
+private:
+    const VolumeShape& s_;
+    const TransportInput& in_;
+    glm::dvec2 run_;
+    double shallowest_ = kInfDepth;
+    std::vector<double> col_focus_, filtered_, rowpass_;
+    std::vector<std::uint8_t> flags_;
+};
+
+// ln I at one water cell (before the past-focus fallback and the cap) and the ray direction t there.
+// `clamped` counts a nearly horizontal ray.
+double integrate_cell(const VolumeD& T, const LnField& field, const TransportInput& in, const glm::dvec3& light, int i,
+                      int j, int k, double depth, glm::dvec3& t, std::int64_t& clamped) {
+    const VolumeShape& s = T.shape;
+    const double h = s.spacing;
+    // Bound on |Laplacian| in the integration (a front radius of one cell): only reached at a focus.
+    const double lap_limit = 1.0 / h;
+    const glm::dvec3 p = s.center(i, j, k);
+    const double lap_c = field.lap.data[s.index(i, j, k)];
+    t = gradient(T, i, j, k);
+    const double len = glm::length(t);
+    if (!(len > 0.0) || t.z / len > -0.2) {
+        // Nearly horizontal (or undefined) ray: no semi-Lagrangian step across a layer.
+        ++clamped;
+        t = glm::dvec3(0.0, 0.0, -1.0);
+    } else {
+        t /= len;
+    }
+    if (depth >= 2.0 * h) {
+        // Back along the (straight) ray up to kJump layers, to the farthest layer whose cells around the
+        // ray are all known, integrating -Laplacian T - Ka by the trapezoid rule over the layer crossings:
+        // one interpolation of ln I per kJump layers.
+        const double ds = h / -t.z;
+        double integral = 0.5 * std::clamp(lap_c, -lap_limit, lap_limit), best_integral = 0.0, best = 0.0;
+        int best_m = 0;
+        for (int m = 1; m <= kJump && k + m < s.nz; ++m) {
+            const glm::dvec3 q = p - (m * ds) * t;
+            const double lq = std::clamp(field.laplacian(k + m, q.x, q.y), -lap_limit, lap_limit);
+            double smp;
+            if (!field.sample(k + m, q.x, q.y, smp)) break;
+            best = smp;
+            best_m = m;
+            best_integral = integral + 0.5 * lq;
+            integral += lq;
+        }
+        if (best_m > 0) return best - best_integral * ds - in.absorption * best_m * ds;
+    }
+    // At the interface: the flux E0 cos_i T dA through an interface element leaves in the refracted beam,
+    // whose cross-section is cos_t dA, so I = E0 cos_i T / cos_t; then along the exact refracted ray down
+    // to the cell.
+    Refraction r;
+    const double run = std::max(0.0, refracted_foot(*in.interface, p, light, in.ior, r));
+    const double transmittance = in.fresnel ? fresnel_transmittance(r.cos_i, r.cos_t, 1.0, in.ior) : 1.0;
+    const double i0 = r.lit && r.cos_t > 0.0 ? in.irradiance * r.cos_i * transmittance / r.cos_t : 0.0;
+    const double lap_used = std::clamp(lap_c, -lap_limit, lap_limit);
+    if (depth < 2.0 * h) t = r.direction;  // the exact ray at the interface
+    return i0 > 0.0 ? std::log(i0) - lap_used * run - in.absorption * run : kLnFloor;
+}
+
 }  // namespace
 
 void transport(const VolumeD& T, const VolumeF& lap, const TransportInput& in, VolumeF& out, TransportStats& stats) {
     const VolumeShape& s = T.shape;
     const HeightField& hf = *in.interface;
-    const double h = s.spacing;
     const glm::dvec3 light = glm::normalize(in.light);
     const double ln_cap = std::log(std::max(in.irradiance, 1e-300)) + kLnMaxGain;
-    // Bound on |Laplacian| in the integration (a front radius of one cell): only reached at a focus.
-    const double lap_limit = 1.0 / h;
     out.shape = s;
     out.data.assign(s.size(), 0.0f);
     std::vector<double> column_height(static_cast<std::size_t>(s.nx) * s.ny);
@@ -110,141 +254,25 @@ void transport(const VolumeD& T, const VolumeF& lap, const TransportInput& in, V
                    ? std::log(flat.horizontal_irradiance / -flat.direction.z) - in.absorption * path
                    : kLnFloor;
     };
-    std::vector<double> ln_i(s.size(), kLnFloor);
-    std::vector<std::uint8_t> known(s.size(), 0);      // ln_i holds a water cell's value
+    LnField field(s, lap);
     std::vector<std::int64_t> past(static_cast<std::size_t>(s.ny)), clamped(past.size()), nonfinite(past.size());
-
-    // Bilinear sample of layer k at (x, y) over the known cells: false when they weigh too little.
-    struct Sample {
-        double ln = 0.0;
-    };
-    auto sample_layer = [&](int k, double x, double y, Sample& out_s) {
-        const double fx = (x - s.origin.x) / h - 0.5, fy = (y - s.origin.y) / h - 0.5;
-        if (fx < -0.5 || fy < -0.5 || fx > s.nx - 0.5 || fy > s.ny - 0.5) return false;
-        const double cx = std::clamp(fx, 0.0, s.nx - 1.0), cy = std::clamp(fy, 0.0, s.ny - 1.0);
-        const int i0 = std::min(static_cast<int>(cx), s.nx - 1), j0 = std::min(static_cast<int>(cy), s.ny - 1);
-        const int i1 = std::min(i0 + 1, s.nx - 1), j1 = std::min(j0 + 1, s.ny - 1);
-        const double wx = cx - i0, wy = cy - j0;
-        const int ii[4] = {i0, i1, i0, i1}, jj[4] = {j0, j0, j1, j1};
-        const double ww[4] = {(1 - wx) * (1 - wy), wx * (1 - wy), (1 - wx) * wy, wx * wy};
-        double wsum = 0.0, l = 0.0;
-        for (int q = 0; q < 4; ++q) {
-            if (ww[q] <= 0.0) continue;
-            const std::size_t u = s.index(ii[q], jj[q], k);
-            if (!known[u]) return false;
-            wsum += ww[q];
-            l += ww[q] * ln_i[u];
-        }
-        if (wsum <= 0.0) return false;
-        out_s.ln = l / wsum;
-        return true;
-    };
-    auto lap_at = [&](int k, double x, double y) {
-        const double cx = std::clamp((x - s.origin.x) / h - 0.5, 0.0, s.nx - 1.0);
-        const double cy = std::clamp((y - s.origin.y) / h - 0.5, 0.0, s.ny - 1.0);
-        const int i0 = std::min(static_cast<int>(cx), s.nx - 1), j0 = std::min(static_cast<int>(cy), s.ny - 1);
-        const int i1 = std::min(i0 + 1, s.nx - 1), j1 = std::min(j0 + 1, s.ny - 1);
-        const double wx = cx - i0, wy = cy - j0;
-        return (1 - wy) * ((1 - wx) * lap.at(i0, j0, k) + wx * lap.at(i1, j0, k)) +
-               wy * ((1 - wx) * lap.at(i0, j1, k) + wx * lap.at(i1, j1, k));
-    };
-
-    // Past-focus flags of one layer (with focus_map): the column minimum of the vertex focus depths,
-    // min-filtered over the window the layer's light can enter through, moved down the mean ray.
-    std::vector<double> col_focus, filtered, rowpass;
-    if (in.focus_map) {
-        col_focus = column_focus(s, hf, *in.focus_map);
-        filtered.resize(col_focus.size());
-        rowpass.resize(col_focus.size());
-    }
-    const double shallowest = in.focus_map ? *std::min_element(col_focus.begin(), col_focus.end()) : in.first_focus_depth;
-    const glm::dvec2 run = glm::dvec2(flat.direction) / std::max(-flat.direction.z, 1e-6);
-    std::vector<std::uint8_t> layer_past(static_cast<std::size_t>(s.nx) * s.ny, 0);
-    auto flag_layer = [&](int k) {
-        const double depth = surface_z - s.center(0, 0, k).z;
-        std::fill(layer_past.begin(), layer_past.end(), std::uint8_t(depth >= shallowest));
-        if (!in.focus_map || depth < shallowest) return;
-        const int r = static_cast<int>(std::ceil((in.spread * depth + h) / h));
-        tbb::parallel_for(0, s.ny, [&](int j) {
-            std::vector<double> pre, suf;
-            const std::size_t row = static_cast<std::size_t>(j) * s.nx;
-            min_filter_1d(&col_focus[row], &rowpass[row], s.nx, 1, r, pre, suf);
-        });
-        tbb::parallel_for(0, s.nx, [&](int i) {
-            std::vector<double> pre, suf;
-            min_filter_1d(&rowpass[i], &filtered[i], s.ny, s.nx, r, pre, suf);
-        });
-        const int sx = static_cast<int>(std::lround(run.x * depth / h)), sy = static_cast<int>(std::lround(run.y * depth / h));
-        tbb::parallel_for(0, s.ny, [&](int j) {
-            for (int i = 0; i < s.nx; ++i) {
-                const int fi = std::clamp(i - sx, 0, s.nx - 1), fj = std::clamp(j - sy, 0, s.ny - 1);
-                layer_past[static_cast<std::size_t>(j) * s.nx + i] = filtered[static_cast<std::size_t>(fj) * s.nx + fi] <= depth;
-            }
-        });
-    };
+    PastFocusFlags past_focus(s, hf, in, glm::dvec2(flat.direction) / std::max(-flat.direction.z, 1e-6));
 
     for (int k = s.nz - 1; k >= 0; --k) {
-        flag_layer(k);
+        const std::vector<std::uint8_t>& layer_past = past_focus.layer(surface_z - s.center(0, 0, k).z);
         tbb::parallel_for(0, s.ny, [&](int j) {
             for (int i = 0; i < s.nx; ++i) {
                 const std::size_t c = s.index(i, j, k);
                 const glm::dvec3 p = s.center(i, j, k);
                 const double depth = column_height[static_cast<std::size_t>(j) * s.nx + i] - p.z;
                 if (depth < 0.0) continue;  // air: no light
-                const double lap_c = lap.data[c];
+                glm::dvec3 t;
+                double ln = integrate_cell(T, field, in, light, i, j, k, depth, t, clamped[static_cast<std::size_t>(j)]);
                 // Below the first focus (the shallowest point where refracted rays cross) first-arrival
                 // times no longer describe the light: the discrete front rounds the focus off (its
                 // Laplacian saturates near -0.06 / h on the sine scenes instead of diverging), so the
                 // depth comes from the surface (blocks/regime/first_focus.hpp), not from the Laplacian.
-                const bool at_focus = layer_past[static_cast<std::size_t>(j) * s.nx + i] != 0;
-                glm::dvec3 t = gradient(T, i, j, k);
-                const double len = glm::length(t);
-                if (!(len > 0.0) || t.z / len > -0.2) {
-                    // Nearly horizontal (or undefined) ray: no semi-Lagrangian step across a layer.
-                    ++clamped[static_cast<std::size_t>(j)];
-                    t = glm::dvec3(0.0, 0.0, -1.0);
-                } else {
-                    t /= len;
-                }
-                double ln = kLnFloor;
-                bool done = false;
-                if (depth >= 2.0 * h) {
-                    // Back along the (straight) ray up to kJump layers, to the farthest layer whose cells
-                    // around the ray are all known, integrating -Laplacian T - Ka by the trapezoid rule
-                    // over the layer crossings: one interpolation of ln I per kJump layers.
-                    const double ds = h / -t.z;
-                    double integral = 0.5 * std::clamp(lap_c, -lap_limit, lap_limit), best_integral = 0.0;
-                    Sample best;
-                    int best_m = 0;
-                    for (int m = 1; m <= kJump && k + m < s.nz; ++m) {
-                        const glm::dvec3 q = p - (m * ds) * t;
-                        const double lq = std::clamp(lap_at(k + m, q.x, q.y), -lap_limit, lap_limit);
-                        Sample smp;
-                        if (!sample_layer(k + m, q.x, q.y, smp)) break;
-                        best = smp;
-                        best_m = m;
-                        best_integral = integral + 0.5 * lq;
-                        integral += lq;
-                    }
-                    if (best_m > 0) {
-                        ln = best.ln - best_integral * ds - in.absorption * best_m * ds;
-                        done = true;
-                    }
-                }
-                if (!done) {
-                    // At the interface: the flux E0 cos_i T dA through an interface element leaves in
-                    // the refracted beam, whose cross-section is cos_t dA, so I = E0 cos_i T / cos_t;
-                    // then along the exact refracted ray down to the cell.
-                    Refraction r;
-                    const double run = std::max(0.0, refracted_foot(hf, p, light, in.ior, r));
-                    const double transmittance =
-                        in.fresnel ? fresnel_transmittance(r.cos_i, r.cos_t, 1.0, in.ior) : 1.0;
-                    const double i0 = r.lit && r.cos_t > 0.0 ? in.irradiance * r.cos_i * transmittance / r.cos_t : 0.0;
-                    const double lap_used = std::clamp(lap_c, -lap_limit, lap_limit);
-                    if (i0 > 0.0) ln = std::log(i0) - lap_used * run - in.absorption * run;
-                    if (depth < 2.0 * h) t = r.direction;  // the exact ray at the interface
-                }
-                if (at_focus) {
+                if (layer_past[static_cast<std::size_t>(j) * s.nx + i] != 0) {
                     ++past[static_cast<std::size_t>(j)];
                     ln = fallback_ln(p.z);
                     t = flat.direction;
@@ -254,8 +282,8 @@ void transport(const VolumeD& T, const VolumeF& lap, const TransportInput& in, V
                     ++clamped[static_cast<std::size_t>(j)];
                 }
                 ln = std::max(ln, kLnFloor);
-                ln_i[c] = ln;
-                known[c] = 1;
+                field.ln[c] = ln;
+                field.known[c] = 1;
                 // Irradiance on a horizontal receiver: I |t . z|.
                 float e = static_cast<float>(std::exp(ln) * -t.z);
                 if (!std::isfinite(e)) {

@@ -4,9 +4,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+
+#include "wave_math.hpp"
 
 namespace caustics::wave_optics {
 
@@ -164,6 +167,30 @@ void build_refracted_screen(const float* height, const RefractionSetup& s, Refra
         out.folded_cells += folded[static_cast<std::size_t>(j)];
         out.unlit_cells += unlit[static_cast<std::size_t>(j)];
     }
+}
+
+std::int64_t screen_field(const RefractedScreen& screen, int n, double k0, std::vector<ComplexF>& field) {
+    field.resize(static_cast<std::size_t>(n) * n);
+    std::vector<std::int64_t> aliased(static_cast<std::size_t>(n), 0);
+    const double limit = std::numbers::pi / k0;
+    tbb::parallel_for(0, n, [&](int j) {
+        const std::size_t row = static_cast<std::size_t>(j) * n, next = static_cast<std::size_t>((j + 1) % n) * n;
+        std::int64_t count = 0;
+        for (int i = 0; i < n; ++i) {
+            const float* P = screen.path.data();
+            float s, c;
+            fast_sincos(static_cast<float>(k0 * P[row + i]), s, c);   // |phase| < 1e4, as set_phase_screen's
+            const float a = screen.amplitude[row + i];
+            field[row + i] = ComplexF(a * c, a * s);
+            const int i1 = (i + 1) % n;
+            count += static_cast<int>(std::abs(P[row + i1] - P[row + i]) > limit) |
+                     static_cast<int>(std::abs(P[next + i] - P[row + i]) > limit);
+        }
+        aliased[static_cast<std::size_t>(j)] = count;
+    });
+    std::int64_t total = 0;
+    for (std::int64_t c : aliased) total += c;
+    return total;
 }
 
 }  // namespace caustics::wave_optics

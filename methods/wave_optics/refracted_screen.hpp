@@ -25,6 +25,8 @@
 
 #include <glm/glm.hpp>
 
+#include <caustics/blocks/fft/fft.hpp>
+
 namespace caustics::wave_optics {
 
 struct RefractionSetup {
@@ -54,5 +56,9 @@ void build_refracted_screen(const float* height, const RefractionSetup& setup, R
 
 // Unpolarised Fresnel transmittance from air into a medium of index n at incidence cosine ci.
 double fresnel_transmittance(double ci, double n);
+
+// u = a exp(i k0 P) of a refracted screen into `field` (n x n); returns the cells whose phase step to the
+// next cell in x or y exceeds pi (the screen is under-resolved there), as set_phase_screen() does.
+std::int64_t screen_field(const RefractedScreen& screen, int n, double k0, std::vector<ComplexF>& field);
 
 }  // namespace caustics::wave_optics

@@ -278,4 +278,43 @@ void WaveFieldTable::lookup(const LookupGeometry& geo, const std::vector<ShadePo
     }
 }
 
+void fill_periodic_texture(const WaveFieldTable& table, int n, const LookupGeometry& geo, Image& mono, Image* rgb) {
+    const int W = mono.width, H = mono.height;
+    const double z = geo.depths.empty() ? 0.0 : geo.depths.front();
+    const double dx = geo.lx / n, dy = geo.ly / n;
+    const double cos_t = std::max(1e-9, -geo.refracted.z);
+    const float scale = static_cast<float>(geo.irradiance * std::exp(-geo.absorption * z / cos_t));
+    auto wrap = [](int i, int m) {
+        i %= m;
+        return i < 0 ? i + m : i;
+    };
+    tbb::parallel_for(tbb::blocked_range<int>(0, H, 8), [&](const tbb::blocked_range<int>& r) {
+        for (int j = r.begin(); j < r.end(); ++j) {
+            const double ty = ((j + 0.5) * geo.ly / H - z * geo.walk.y) / dy;
+            const double fyf = std::floor(ty);
+            const float ay = static_cast<float>(ty - fyf);
+            const int ya = wrap(static_cast<int>(fyf), n), yb = wrap(ya + 1, n);
+            for (int i = 0; i < W; ++i) {
+                const double tx = ((i + 0.5) * geo.lx / W - z * geo.walk.x) / dx;
+                const double fxf = std::floor(tx);
+                const float ax = static_cast<float>(tx - fxf);
+                const int xa = wrap(static_cast<int>(fxf), n), xb = wrap(xa + 1, n);
+                auto bilinear = [&](int c) {
+                    const float* t = table.slice(0, c);
+                    const float v00 = t[static_cast<std::size_t>(ya) * n + xa];
+                    const float v10 = t[static_cast<std::size_t>(ya) * n + xb];
+                    const float v01 = t[static_cast<std::size_t>(yb) * n + xa];
+                    const float v11 = t[static_cast<std::size_t>(yb) * n + xb];
+                    const float top = v00 + ax * (v10 - v00);
+                    const float bottom = v01 + ax * (v11 - v01);
+                    return top + ay * (bottom - top);
+                };
+                mono.at(i, j) = scale * bilinear(0);
+                if (rgb != nullptr)
+                    for (int c = 0; c < 3; ++c) rgb->at(i, j, c) = scale * bilinear(c + 1);
+            }
+        }
+    });
+}
+
 }  // namespace caustics::wave_optics

@@ -10,6 +10,7 @@
 #include <glm/glm.hpp>
 
 #include <caustics/scene/heightfield/heightfield.hpp>
+#include <caustics/util/image.hpp>
 #include "wave_propagator.hpp"
 
 namespace caustics::wave_optics {
@@ -91,5 +92,12 @@ private:
     SurfaceSamples surface_;
     float* slice_mut(int s, int channel);
 };
+
+// Periodic texture from slice 0 of the table (its depth is geo.depths[0]): texel (i, j) is centred at
+// geo.origin + ((i + 1/2) lx / width, (j + 1/2) ly / height) on a horizontal plane; periodic bilinear
+// lookup in the grid x grid slice with the propagator's walk removed, as WaveFieldTable::lookup() does,
+// but without its coverage test (the field tiles), scaled to irradiance (a horizontal plane faces the
+// refracted beam by the factor 1 that lookup() divides out).
+void fill_periodic_texture(const WaveFieldTable& table, int n, const LookupGeometry& geo, Image& mono, Image* rgb);
 
 }  // namespace caustics::wave_optics

@@ -43,76 +43,6 @@ struct Spectral {
     std::unique_ptr<WavePropagator> propagator;
 };
 
-// Periodic texture from slice 0 of the table (its depth is geo.depths[0]): texel (i, j) is centred at
-// geo.origin + ((i + 1/2) lx / width, (j + 1/2) ly / height) on a horizontal plane; periodic bilinear
-// lookup in the grid x grid slice with the propagator's walk removed, as WaveFieldTable::lookup() does,
-// but without its coverage test (the field tiles), scaled to irradiance (a horizontal plane faces the
-// refracted beam by the factor 1 that lookup() divides out).
-void fill_texture(const WaveFieldTable& table, int n, const LookupGeometry& geo, Image& mono, Image* rgb) {
-    const int W = mono.width, H = mono.height;
-    const double z = geo.depths.empty() ? 0.0 : geo.depths.front();
-    const double dx = geo.lx / n, dy = geo.ly / n;
-    const double cos_t = std::max(1e-9, -geo.refracted.z);
-    const float scale = static_cast<float>(geo.irradiance * std::exp(-geo.absorption * z / cos_t));
-    auto wrap = [](int i, int m) {
-        i %= m;
-        return i < 0 ? i + m : i;
-    };
-    tbb::parallel_for(tbb::blocked_range<int>(0, H, 8), [&](const tbb::blocked_range<int>& r) {
-        for (int j = r.begin(); j < r.end(); ++j) {
-            const double ty = ((j + 0.5) * geo.ly / H - z * geo.walk.y) / dy;
-            const double fyf = std::floor(ty);
-            const float ay = static_cast<float>(ty - fyf);
-            const int ya = wrap(static_cast<int>(fyf), n), yb = wrap(ya + 1, n);
-            for (int i = 0; i < W; ++i) {
-                const double tx = ((i + 0.5) * geo.lx / W - z * geo.walk.x) / dx;
-                const double fxf = std::floor(tx);
-                const float ax = static_cast<float>(tx - fxf);
-                const int xa = wrap(static_cast<int>(fxf), n), xb = wrap(xa + 1, n);
-                auto bilinear = [&](int c) {
-                    const float* t = table.slice(0, c);
-                    const float v00 = t[static_cast<std::size_t>(ya) * n + xa];
-                    const float v10 = t[static_cast<std::size_t>(ya) * n + xb];
-                    const float v01 = t[static_cast<std::size_t>(yb) * n + xa];
-                    const float v11 = t[static_cast<std::size_t>(yb) * n + xb];
-                    const float top = v00 + ax * (v10 - v00);
-                    const float bottom = v01 + ax * (v11 - v01);
-                    return top + ay * (bottom - top);
-                };
-                mono.at(i, j) = scale * bilinear(0);
-                if (rgb != nullptr)
-                    for (int c = 0; c < 3; ++c) rgb->at(i, j, c) = scale * bilinear(c + 1);
-            }
-        }
-    });
-}
-
-// u = a exp(i k0 P) of a refracted screen into `field` (n x n); returns the cells whose phase step to the
-// next cell in x or y exceeds pi (the screen is under-resolved there), as set_phase_screen() does.
-std::int64_t refracted_field(const RefractedScreen& screen, int n, double k0, std::vector<ComplexF>& field) {
-    field.resize(static_cast<std::size_t>(n) * n);
-    std::vector<std::int64_t> aliased(static_cast<std::size_t>(n), 0);
-    const double limit = std::numbers::pi / k0;
-    tbb::parallel_for(0, n, [&](int j) {
-        const std::size_t row = static_cast<std::size_t>(j) * n, next = static_cast<std::size_t>((j + 1) % n) * n;
-        std::int64_t count = 0;
-        for (int i = 0; i < n; ++i) {
-            const float* P = screen.path.data();
-            float s, c;
-            fast_sincos(static_cast<float>(k0 * P[row + i]), s, c);   // |phase| < 1e4, as set_phase_screen's
-            const float a = screen.amplitude[row + i];
-            field[row + i] = ComplexF(a * c, a * s);
-            const int i1 = (i + 1) % n;
-            count += static_cast<int>(std::abs(P[row + i1] - P[row + i]) > limit) |
-                     static_cast<int>(std::abs(P[next + i] - P[row + i]) > limit);
-        }
-        aliased[static_cast<std::size_t>(j)] = count;
-    });
-    std::int64_t total = 0;
-    for (std::int64_t c : aliased) total += c;
-    return total;
-}
-
 class WaveOpticsMethod final : public Method {
 public:
     explicit WaveOpticsMethod(const ParamSet& p)
@@ -376,7 +306,7 @@ void WaveOpticsMethod::fill_table(const SurfaceSamples& surface, const std::vect
                 aliased += sp.propagator->set_phase_screen(surface.height.data(), static_cast<float>(sp.phase_per_m));
             } else {
                 const RefractedScreen& screen = screen_for(surface, sp.n, out);
-                aliased += refracted_field(screen, grid_, 2.0 * std::numbers::pi / (sp.n * sp.lambda), field_);
+                aliased += screen_field(screen, grid_, 2.0 * std::numbers::pi / (sp.n * sp.lambda), field_);
                 sp.propagator->set_field(field_.data());
             }
             phase_ms += lap();
@@ -515,7 +445,7 @@ CausticOutput WaveOpticsMethod::render(const FrameGeometry& frame, const RenderR
         lap();
         out.texture = Image(tr.width, tr.height, 1);
         if (samples_ > 1) out.texture_rgb = Image(tr.width, tr.height, 3);
-        fill_texture(*table_, grid_, lookup_geometry(hf, surface, {depth}), out.texture,
+        fill_periodic_texture(*table_, grid_, lookup_geometry(hf, surface, {depth}), out.texture,
                      samples_ > 1 ? &out.texture_rgb : nullptr);
         out.stages_ms.emplace_back("texture_lookup", lap());
         if (request.receiver == nullptr && request.camera == nullptr) return out;

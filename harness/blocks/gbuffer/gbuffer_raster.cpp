@@ -126,6 +126,139 @@ void check_inputs(const LightProjection& view, const GBufferTriangles& batch,
         throw std::invalid_argument("GBufferRaster: normals must be empty or one per position");
 }
 
+// Pass 2 for one triangle: the pixel centres it covers in rows [row0, row1], depth-tested into `out`;
+// returns the fragments (covered centres).
+std::int64_t draw_triangle(const Setup& s, int row0, int row1, const GBufferTriangles& batch, bool perspective, bool less,
+                           bool write_normals, GBuffer& out, Span& span) {
+    const bool have_normals = !batch.normals.empty();
+    const std::int32_t id = batch.id;
+    std::int64_t fragments = 0;
+    const int ya = std::max(s.y0, row0), yb = std::min(s.y1, row1);
+    // Edge k is opposite vertex k: e0 = v1 -> v2, e1 = v2 -> v0, e2 = v0 -> v1.
+    const int a[3] = {1, 2, 0}, c[3] = {2, 0, 1};
+    std::int64_t bias[3], step_x[3];
+    for (int k = 0; k < 3; ++k) {
+        const std::int64_t dx = s.X[c[k]] - s.X[a[k]], dy = s.Y[c[k]] - s.Y[a[k]];
+        bias[k] = top_left(dx, dy) ? 0 : -1;
+        step_x[k] = -dy * static_cast<std::int64_t>(kSubpixel);
+    }
+    const glm::vec3 P[3] = {batch.positions[s.v[0]], batch.positions[s.v[1]], batch.positions[s.v[2]]};
+    glm::vec3 N[3];
+    for (int k = 0; k < 3; ++k) N[k] = have_normals ? batch.normals[s.v[k]] : s.flat_normal;
+    const float iz[3] = {static_cast<float>(1.0 / s.z[0]), static_cast<float>(1.0 / s.z[1]),
+                         static_cast<float>(1.0 / s.z[2])};
+    const float z[3] = {static_cast<float>(s.z[0]), static_cast<float>(s.z[1]), static_cast<float>(s.z[2])};
+    const float inv_area = static_cast<float>(s.inv_area);
+    // Barycentrics (l0, l1) -> perspective-correct weights (l2 completed) and the depth.
+    auto weights = [&](float& l0, float& l1, float& l2) {
+        l2 = 1.0f - l0 - l1;
+        if (!perspective) return l0 * z[0] + l1 * z[1] + l2 * z[2];
+        const float w0 = l0 * iz[0], w1 = l1 * iz[1], w2 = l2 * iz[2];
+        const float d = 1.0f / (w0 + w1 + w2);
+        l0 = w0 * d, l1 = w1 * d, l2 = w2 * d;
+        return d;
+    };
+    auto position_at = [&](float l0, float l1, float l2) { return l0 * P[0] + l1 * P[1] + l2 * P[2]; };
+    // The depth test and the stores of one fragment.
+    auto write = [&](std::size_t i, float d, float l0, float l1, float l2, const glm::vec3& position) {
+        if (less ? !(d < out.depth[i]) : !(d > out.depth[i])) return;
+        out.depth[i] = d;
+        out.position[i] = position;
+        if (write_normals) {
+            const glm::vec3 nn = l0 * N[0] + l1 * N[1] + l2 * N[2];
+            const float len2 = glm::dot(nn, nn);
+            out.normal[i] = len2 > 0.0f ? nn / std::sqrt(len2) : s.flat_normal;
+        }
+        out.id[i] = id;
+    };
+    for (int y = ya; y <= yb; ++y) {
+        const std::int64_t py = (2 * static_cast<std::int64_t>(y) + 1) << (kSubpixelBits - 1);
+        const std::int64_t px0 = (2 * static_cast<std::int64_t>(s.x0) + 1) << (kSubpixelBits - 1);
+        std::int64_t E[3];
+        for (int k = 0; k < 3; ++k) E[k] = edge(s.X[a[k]], s.Y[a[k]], s.X[c[k]], s.Y[c[k]], px0, py);
+        // The row's covered span, exactly from the integer edge functions: E_k + bias_k >= 0 at
+        // x = x0 + j is E_k + bias_k + j step_k >= 0, a half-line in j (or all / nothing).
+        std::int64_t j_lo = 0, j_hi = s.x1 - s.x0;
+        if (j_hi < kNarrow) {
+            // Narrow: walk the few centres (the covered ones form an interval) instead of
+            // dividing; the same span.
+            std::int64_t e[3] = {E[0] + bias[0], E[1] + bias[1], E[2] + bias[2]};
+            const std::int64_t last = j_hi;
+            j_lo = 0, j_hi = -1;
+            for (std::int64_t j = 0; j <= last; ++j, e[0] += step_x[0], e[1] += step_x[1], e[2] += step_x[2]) {
+                if ((e[0] | e[1] | e[2]) < 0) {   // some edge function negative: outside
+                    if (j_hi >= j_lo && j > j_lo) break;
+                    continue;
+                }
+                if (j_hi < j_lo) j_lo = j;
+                j_hi = j;
+            }
+        } else {
+            for (int k = 0; k < 3; ++k) {
+                const std::int64_t e0 = E[k] + bias[k], st = step_x[k];
+                if (st > 0) j_lo = std::max(j_lo, e0 >= 0 ? 0 : floor_div(-e0 + st - 1, st));
+                else if (st < 0) j_hi = std::min(j_hi, e0 < 0 ? -1 : floor_div(e0, -st));
+                else if (e0 < 0) j_hi = -1;
+            }
+        }
+        if (j_lo > j_hi) continue;
+        for (int k = 0; k < 3; ++k) E[k] += j_lo * step_x[k];
+        const int xs = s.x0 + static_cast<int>(j_lo), xe = s.x0 + static_cast<int>(j_hi);
+        fragments += xe - xs + 1;
+        if (xe - xs + 1 < kShortSpan) {
+            for (int x = xs; x <= xe; ++x, E[0] += step_x[0], E[1] += step_x[1]) {
+                float l0 = static_cast<float>(E[0]) * inv_area, l1 = static_cast<float>(E[1]) * inv_area, l2;
+                const float d = weights(l0, l1, l2);
+                write(out.index(x, y), d, l0, l1, l2, position_at(l0, l1, l2));
+            }
+            continue;
+        }
+        // Longer rows in spans of up to kSpan pixels, three loops: the barycentrics from the
+        // exact integer edge values (scalar: int64 -> float), the interpolation (float only,
+        // so the compiler vectorises it; the same operations as one pixel at a time), then
+        // the depth test and the stores.
+        for (int xc = xs; xc <= xe; xc += kSpan) {
+            const int count = std::min(kSpan, xe - xc + 1);
+            if (exact_in_double(E[0], step_x[0], count) && exact_in_double(E[1], step_x[1], count)) {
+                // E + j step in double is the integer itself (all below 2^53), so rounding it to
+                // float gives the same value as the int64 conversion, and the loop vectorises.
+                const double e0 = static_cast<double>(E[0]), e1 = static_cast<double>(E[1]);
+                const double s0 = static_cast<double>(step_x[0]), s1 = static_cast<double>(step_x[1]);
+                for (int j = 0; j < count; ++j) {
+                    span.l0[j] = static_cast<float>(e0 + j * s0) * inv_area;
+                    span.l1[j] = static_cast<float>(e1 + j * s1) * inv_area;
+                }
+                E[0] += count * step_x[0], E[1] += count * step_x[1];
+            } else {
+                for (int j = 0; j < count; ++j, E[0] += step_x[0], E[1] += step_x[1]) {
+                    span.l0[j] = static_cast<float>(E[0]) * inv_area;
+                    span.l1[j] = static_cast<float>(E[1]) * inv_area;
+                }
+            }
+            for (int j = 0; j < count; ++j) {
+                float l0 = span.l0[j], l1 = span.l1[j], l2;
+                span.d[j] = weights(l0, l1, l2);
+                span.l0[j] = l0, span.l1[j] = l1, span.l2[j] = l2;
+                span.px[j] = l0 * P[0].x + l1 * P[1].x + l2 * P[2].x;
+                span.py[j] = l0 * P[0].y + l1 * P[1].y + l2 * P[2].y;
+                span.pz[j] = l0 * P[0].z + l1 * P[1].z + l2 * P[2].z;
+            }
+            const std::size_t i0 = out.index(xc, y);
+            // Positions only (the receivers' maps), every fragment of the span passing the
+            // depth test (a receiver drawn where nothing nearer was): the same stores as
+            // write(), without a test per texel, vectorised.
+            if (!write_normals && span_passes(span, count, less, &out.depth[i0])) {
+                store_span(span, count, id, &out.depth[i0], &out.position[i0].x, &out.id[i0]);
+                continue;
+            }
+            for (int j = 0; j < count; ++j)
+                write(i0 + static_cast<std::size_t>(j), span.d[j], span.l0[j], span.l1[j], span.l2[j],
+                      glm::vec3(span.px[j], span.py[j], span.pz[j]));
+        }
+    }
+    return fragments;
+}
+
 }  // namespace
 
 void GBuffer::clear(int w, int h, DepthTest test, bool with_normals) {
@@ -158,6 +291,10 @@ struct GBufferRaster::Impl {
     std::vector<std::uint32_t> entries;
     std::vector<GBufferStats> chunk_stats;
     std::vector<std::int64_t> band_fragments;
+
+    void project(const LightProjection& view, const GBufferTriangles& batch);
+    void set_up(const LightProjection& view, const GBufferTriangles& batch, CullMode cull, int W, int H, int bands,
+                std::size_t chunks);
 };
 
 GBufferRaster::GBufferRaster() : impl_(std::make_unique<Impl>()) {}
@@ -236,30 +373,14 @@ void GBufferRaster::clip_near(const LightProjection& view, const GBufferTriangle
     eff = {m.cpos, normals ? std::span<const glm::vec3>(m.cnorm) : std::span<const glm::vec3>(), m.ctri, batch.id};
 }
 
-GBufferStats GBufferRaster::draw_clipped(const LightProjection& view, const GBufferTriangles& batch, CullMode cull,
-                                         DepthTest test, GBuffer& front_target, GBuffer* back_target,
-                                         const GBufferStats& pre) {
-    GBuffer& target = front_target;
-    Impl& m = *impl_;
-    const std::size_t n = batch.triangles.size();
-    const int W = target.width, H = target.height;
-    const int bands = (H + kBandRows - 1) / kBandRows;
-    const std::size_t chunks = (n + kChunk - 1) / kChunk;
-    // Scratch only grows: batches of different sizes alternate every frame (a dense mesh, then a plane),
-    // and shrinking would make the next frame value-initialise the whole array again.
-    if (m.setups.size() < n) m.setups.resize(n);
-    m.drawable.assign(chunks, 0);
-    m.counts.assign(chunks * bands, 0);
-    m.chunk_stats.assign(chunks, GBufferStats{});
-    const bool perspective = view.type == ProjectionType::Perspective;
-
-    // Pass 0 (the vertex stage): every vertex projected once to fixed-point pixel coordinates.
+// Pass 0 of draw_clipped (the vertex stage): every vertex projected once to fixed-point pixel coordinates.
+void GBufferRaster::Impl::project(const LightProjection& view, const GBufferTriangles& batch) {
     const std::size_t nv = batch.positions.size();
-    if (m.verts.size() < nv) m.verts.resize(nv);
-    if (m.vdepth.size() < nv) m.vdepth.resize(nv);
+    if (verts.size() < nv) verts.resize(nv);
+    if (vdepth.size() < nv) vdepth.resize(nv);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nv, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t i = r.begin(); i != r.end(); ++i) {
-            VertexOut& o = m.verts[i];
+            VertexOut& o = verts[i];
             double px, py, z;
             const bool ok = view.project(glm::dvec3(batch.positions[i]), px, py, z) && std::isfinite(px) &&
                             std::isfinite(py) && std::abs(px) <= kMaxPixel && std::abs(py) <= kMaxPixel;
@@ -269,9 +390,17 @@ GBufferStats GBufferRaster::draw_clipped(const LightProjection& view, const GBuf
             }
             o.X = static_cast<std::int32_t>(std::llround(px * kSubpixel));
             o.Y = static_cast<std::int32_t>(std::llround(py * kSubpixel));
-            m.vdepth[i] = z;
+            vdepth[i] = z;
         }
     });
+}
+
+// Pass 1 of draw_clipped: set up, cull and count every triangle per (chunk, band), then list each band's
+// drawable triangles in input order.
+void GBufferRaster::Impl::set_up(const LightProjection& view, const GBufferTriangles& batch, CullMode cull, int W, int H,
+                                 int bands, std::size_t chunks) {
+    const std::size_t n = batch.triangles.size(), nv = batch.positions.size();
+    const bool perspective = view.type == ProjectionType::Perspective;
     // Pixel centre indices i with (i + 1/2) * 256 in [lo, hi] (fixed point).
     auto centre_lo = [](std::int64_t lo) {
         return static_cast<int>(floor_div(lo - (kSubpixelOne / 2) + kSubpixelOne - 1, kSubpixelOne));
@@ -282,7 +411,7 @@ GBufferStats GBufferRaster::draw_clipped(const LightProjection& view, const GBuf
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, 1), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t c = r.begin(); c != r.end(); ++c) {
             GBufferStats st;   // local: no false sharing between chunks
-            std::uint32_t* count = &m.counts[c * bands];
+            std::uint32_t* count = &counts[c * bands];
             // Setups are packed: the band pass then reads only drawable triangles, nearly sequentially
             // (most triangles of a dense mesh at a coarse grid are not drawable).
             std::size_t slot = c * kChunk;
@@ -293,7 +422,7 @@ GBufferStats GBufferRaster::draw_clipped(const LightProjection& view, const GBuf
                     ++st.clipped;
                     continue;
                 }
-                const VertexOut* V[3] = {&m.verts[tri.x], &m.verts[tri.y], &m.verts[tri.z]};
+                const VertexOut* V[3] = {&verts[tri.x], &verts[tri.y], &verts[tri.z]};
                 if (V[0]->X == kNotProjected || V[1]->X == kNotProjected || V[2]->X == kNotProjected) {
                     ++st.clipped;
                     continue;
@@ -341,169 +470,66 @@ GBufferStats GBufferRaster::draw_clipped(const LightProjection& view, const GBuf
                     continue;
                 }
                 if (cull != CullMode::None && screen_reject()) continue;
-                for (int k = 0; k < 3; ++k) s.z[k] = m.vdepth[s.v[k]];
+                for (int k = 0; k < 3; ++k) s.z[k] = vdepth[s.v[k]];
                 s.inv_area = 1.0 / static_cast<double>(area);
                 s.front = front;
                 const double len = glm::length(ng);
                 s.flat_normal = len > 0.0 ? glm::vec3(ng / len) : glm::vec3(0.0f);
-                m.setups[slot++] = s;
+                setups[slot++] = s;
                 for (int b = s.y0 / kBandRows; b <= s.y1 / kBandRows; ++b) ++count[b];
             }
-            m.drawable[c] = static_cast<std::uint32_t>(slot - c * kChunk);
-            m.chunk_stats[c] = st;
+            drawable[c] = static_cast<std::uint32_t>(slot - c * kChunk);
+            chunk_stats[c] = st;
         }
     });
     // Offsets, band-major then chunk order: each band lists its triangles in input order.
-    m.entries.resize(band_offsets(m.counts, chunks, static_cast<std::size_t>(bands), m.cursors, m.band_start));
+    entries.resize(band_offsets(counts, chunks, static_cast<std::size_t>(bands), cursors, band_start));
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunks, 1), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t c = r.begin(); c != r.end(); ++c) {
-            std::uint32_t* cursor = &m.cursors[c * bands];
-            for (std::size_t t = c * kChunk; t < c * kChunk + m.drawable[c]; ++t) {
-                const Setup& s = m.setups[t];
-                for (int b = s.y0 / kBandRows; b <= s.y1 / kBandRows; ++b) m.entries[cursor[b]++] = static_cast<std::uint32_t>(t);
+            std::uint32_t* cursor = &cursors[c * bands];
+            for (std::size_t t = c * kChunk; t < c * kChunk + drawable[c]; ++t) {
+                const Setup& s = setups[t];
+                for (int b = s.y0 / kBandRows; b <= s.y1 / kBandRows; ++b) entries[cursor[b]++] = static_cast<std::uint32_t>(t);
             }
         }
     });
+}
+
+GBufferStats GBufferRaster::draw_clipped(const LightProjection& view, const GBufferTriangles& batch, CullMode cull,
+                                         DepthTest test, GBuffer& front_target, GBuffer* back_target,
+                                         const GBufferStats& pre) {
+    GBuffer& target = front_target;
+    Impl& m = *impl_;
+    const std::size_t n = batch.triangles.size();
+    const int W = target.width, H = target.height;
+    const int bands = (H + kBandRows - 1) / kBandRows;
+    const std::size_t chunks = (n + kChunk - 1) / kChunk;
+    // Scratch only grows: batches of different sizes alternate every frame (a dense mesh, then a plane),
+    // and shrinking would make the next frame value-initialise the whole array again.
+    if (m.setups.size() < n) m.setups.resize(n);
+    m.drawable.assign(chunks, 0);
+    m.counts.assign(chunks * bands, 0);
+    m.chunk_stats.assign(chunks, GBufferStats{});
+    const bool perspective = view.type == ProjectionType::Perspective;
+
+    m.project(view, batch);
+    m.set_up(view, batch, cull, W, H, bands, chunks);
 
     // Pass 2: each band draws its triangles in order.
     m.band_fragments.assign(static_cast<std::size_t>(bands), 0);
     const bool less = test == DepthTest::Less;
-    const bool have_normals = !batch.normals.empty();
     if (back_target && back_target->normal.empty() != target.normal.empty())
         throw std::invalid_argument("GBufferRaster: front and back targets must both have normals or neither");
     const bool write_normals = !target.normal.empty();
     tbb::parallel_for(tbb::blocked_range<int>(0, bands, 1), [&](const tbb::blocked_range<int>& r) {
         Span span;
-        const std::int32_t id = batch.id;
         for (int b = r.begin(); b != r.end(); ++b) {
             const int row0 = b * kBandRows, row1 = std::min(H, row0 + kBandRows) - 1;
             std::int64_t fragments = 0;
             for (std::uint32_t e = m.band_start[static_cast<std::size_t>(b)]; e < m.band_start[static_cast<std::size_t>(b) + 1]; ++e) {
                 const Setup& s = m.setups[m.entries[e]];
                 GBuffer& out = back_target && !s.front ? *back_target : target;
-                const int ya = std::max(s.y0, row0), yb = std::min(s.y1, row1);
-                // Edge k is opposite vertex k: e0 = v1 -> v2, e1 = v2 -> v0, e2 = v0 -> v1.
-                const int a[3] = {1, 2, 0}, c[3] = {2, 0, 1};
-                std::int64_t bias[3], step_x[3];
-                for (int k = 0; k < 3; ++k) {
-                    const std::int64_t dx = s.X[c[k]] - s.X[a[k]], dy = s.Y[c[k]] - s.Y[a[k]];
-                    bias[k] = top_left(dx, dy) ? 0 : -1;
-                    step_x[k] = -dy * static_cast<std::int64_t>(kSubpixel);
-                }
-                const glm::vec3 P[3] = {batch.positions[s.v[0]], batch.positions[s.v[1]], batch.positions[s.v[2]]};
-                glm::vec3 N[3];
-                for (int k = 0; k < 3; ++k) N[k] = have_normals ? batch.normals[s.v[k]] : s.flat_normal;
-                const float iz[3] = {static_cast<float>(1.0 / s.z[0]), static_cast<float>(1.0 / s.z[1]),
-                                     static_cast<float>(1.0 / s.z[2])};
-                const float z[3] = {static_cast<float>(s.z[0]), static_cast<float>(s.z[1]), static_cast<float>(s.z[2])};
-                const float inv_area = static_cast<float>(s.inv_area);
-                // Barycentrics (l0, l1) -> perspective-correct weights (l2 completed) and the depth.
-                auto weights = [&](float& l0, float& l1, float& l2) {
-                    l2 = 1.0f - l0 - l1;
-                    if (!perspective) return l0 * z[0] + l1 * z[1] + l2 * z[2];
-                    const float w0 = l0 * iz[0], w1 = l1 * iz[1], w2 = l2 * iz[2];
-                    const float d = 1.0f / (w0 + w1 + w2);
-                    l0 = w0 * d, l1 = w1 * d, l2 = w2 * d;
-                    return d;
-                };
-                auto position_at = [&](float l0, float l1, float l2) { return l0 * P[0] + l1 * P[1] + l2 * P[2]; };
-                // The depth test and the stores of one fragment.
-                auto write = [&](std::size_t i, float d, float l0, float l1, float l2, const glm::vec3& position) {
-                    if (less ? !(d < out.depth[i]) : !(d > out.depth[i])) return;
-                    out.depth[i] = d;
-                    out.position[i] = position;
-                    if (write_normals) {
-                        const glm::vec3 nn = l0 * N[0] + l1 * N[1] + l2 * N[2];
-                        const float len2 = glm::dot(nn, nn);
-                        out.normal[i] = len2 > 0.0f ? nn / std::sqrt(len2) : s.flat_normal;
-                    }
-                    out.id[i] = id;
-                };
-                for (int y = ya; y <= yb; ++y) {
-                    const std::int64_t py = (2 * static_cast<std::int64_t>(y) + 1) << (kSubpixelBits - 1);
-                    const std::int64_t px0 = (2 * static_cast<std::int64_t>(s.x0) + 1) << (kSubpixelBits - 1);
-                    std::int64_t E[3];
-                    for (int k = 0; k < 3; ++k) E[k] = edge(s.X[a[k]], s.Y[a[k]], s.X[c[k]], s.Y[c[k]], px0, py);
-                    // The row's covered span, exactly from the integer edge functions: E_k + bias_k >= 0 at
-                    // x = x0 + j is E_k + bias_k + j step_k >= 0, a half-line in j (or all / nothing).
-                    std::int64_t j_lo = 0, j_hi = s.x1 - s.x0;
-                    if (j_hi < kNarrow) {
-                        // Narrow: walk the few centres (the covered ones form an interval) instead of
-                        // dividing; the same span.
-                        std::int64_t e[3] = {E[0] + bias[0], E[1] + bias[1], E[2] + bias[2]};
-                        const std::int64_t last = j_hi;
-                        j_lo = 0, j_hi = -1;
-                        for (std::int64_t j = 0; j <= last; ++j, e[0] += step_x[0], e[1] += step_x[1], e[2] += step_x[2]) {
-                            if ((e[0] | e[1] | e[2]) < 0) {   // some edge function negative: outside
-                                if (j_hi >= j_lo && j > j_lo) break;
-                                continue;
-                            }
-                            if (j_hi < j_lo) j_lo = j;
-                            j_hi = j;
-                        }
-                    } else {
-                        for (int k = 0; k < 3; ++k) {
-                            const std::int64_t e0 = E[k] + bias[k], st = step_x[k];
-                            if (st > 0) j_lo = std::max(j_lo, e0 >= 0 ? 0 : floor_div(-e0 + st - 1, st));
-                            else if (st < 0) j_hi = std::min(j_hi, e0 < 0 ? -1 : floor_div(e0, -st));
-                            else if (e0 < 0) j_hi = -1;
-                        }
-                    }
-                    if (j_lo > j_hi) continue;
-                    for (int k = 0; k < 3; ++k) E[k] += j_lo * step_x[k];
-                    const int xs = s.x0 + static_cast<int>(j_lo), xe = s.x0 + static_cast<int>(j_hi);
-                    fragments += xe - xs + 1;
-                    if (xe - xs + 1 < kShortSpan) {
-                        for (int x = xs; x <= xe; ++x, E[0] += step_x[0], E[1] += step_x[1]) {
-                            float l0 = static_cast<float>(E[0]) * inv_area, l1 = static_cast<float>(E[1]) * inv_area, l2;
-                            const float d = weights(l0, l1, l2);
-                            write(out.index(x, y), d, l0, l1, l2, position_at(l0, l1, l2));
-                        }
-                        continue;
-                    }
-                    // Longer rows in spans of up to kSpan pixels, three loops: the barycentrics from the
-                    // exact integer edge values (scalar: int64 -> float), the interpolation (float only,
-                    // so the compiler vectorises it; the same operations as one pixel at a time), then
-                    // the depth test and the stores.
-                    for (int xc = xs; xc <= xe; xc += kSpan) {
-                        const int count = std::min(kSpan, xe - xc + 1);
-                        if (exact_in_double(E[0], step_x[0], count) && exact_in_double(E[1], step_x[1], count)) {
-                            // E + j step in double is the integer itself (all below 2^53), so rounding it to
-                            // float gives the same value as the int64 conversion, and the loop vectorises.
-                            const double e0 = static_cast<double>(E[0]), e1 = static_cast<double>(E[1]);
-                            const double s0 = static_cast<double>(step_x[0]), s1 = static_cast<double>(step_x[1]);
-                            for (int j = 0; j < count; ++j) {
-                                span.l0[j] = static_cast<float>(e0 + j * s0) * inv_area;
-                                span.l1[j] = static_cast<float>(e1 + j * s1) * inv_area;
-                            }
-                            E[0] += count * step_x[0], E[1] += count * step_x[1];
-                        } else {
-                            for (int j = 0; j < count; ++j, E[0] += step_x[0], E[1] += step_x[1]) {
-                                span.l0[j] = static_cast<float>(E[0]) * inv_area;
-                                span.l1[j] = static_cast<float>(E[1]) * inv_area;
-                            }
-                        }
-                        for (int j = 0; j < count; ++j) {
-                            float l0 = span.l0[j], l1 = span.l1[j], l2;
-                            span.d[j] = weights(l0, l1, l2);
-                            span.l0[j] = l0, span.l1[j] = l1, span.l2[j] = l2;
-                            span.px[j] = l0 * P[0].x + l1 * P[1].x + l2 * P[2].x;
-                            span.py[j] = l0 * P[0].y + l1 * P[1].y + l2 * P[2].y;
-                            span.pz[j] = l0 * P[0].z + l1 * P[1].z + l2 * P[2].z;
-                        }
-                        const std::size_t i0 = out.index(xc, y);
-                        // Positions only (the receivers' maps), every fragment of the span passing the
-                        // depth test (a receiver drawn where nothing nearer was): the same stores as
-                        // write(), without a test per texel, vectorised.
-                        if (!write_normals && span_passes(span, count, less, &out.depth[i0])) {
-                            store_span(span, count, id, &out.depth[i0], &out.position[i0].x, &out.id[i0]);
-                            continue;
-                        }
-                        for (int j = 0; j < count; ++j)
-                            write(i0 + static_cast<std::size_t>(j), span.d[j], span.l0[j], span.l1[j], span.l2[j],
-                                  glm::vec3(span.px[j], span.py[j], span.pz[j]));
-                    }
-                }
+                fragments += draw_triangle(s, row0, row1, batch, perspective, less, write_normals, out, span);
             }
             m.band_fragments[static_cast<std::size_t>(b)] = fragments;
         }

@@ -147,6 +147,9 @@ struct TriangleRaster::Impl {
     }
 
     RasterStats draw_grid(const RasterTriangles& batch, bool accumulate, Image& target, int g);
+    // Pass 3 of draw(), one band of rows (raster.cpp).
+    void draw_area_band(const RasterTriangles& batch, int band, bool accumulate, Image& target);
+    void draw_center_band(const RasterTriangles& batch, int band, bool accumulate, Image& target);
 
     // Calls fn(sx, sy, band_lo, band_hi) for every copy of a triangle with bounding box b.
     template <class Fn>
