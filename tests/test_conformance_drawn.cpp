@@ -10,12 +10,16 @@
 //     wherever such cases were drawn (the cases excluded only by bounds within 2x of their limits); further
 //     cases of the same draw are examined when the first ones bring in none that misses.
 // One test per method, over all drawn cases, which prints the per-case table and a summary: the cases
-// inside, the worst error inside and the bound it was held to (`CAUSTICS_CONFORMANCE_CASES=200` gives the
-// README's figures).
+// inside, the worst error inside and the bound it was held to. With CAUSTICS_CONFORMANCE_CSV_DIR set it also
+// writes the cases as <dir>/<method>.csv, which scripts/report/method_table.py turns into the README's
+// method table (scripts/studies/method_table.sh: 200 cases of seed 20261205).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -80,6 +84,31 @@ bool inside_when_widened(const AccuracyClaim& claim) {
     return any;
 }
 
+// The drawn cases of one method as CSV (one row per case), written to a temporary name and renamed.
+void write_cases_csv(const std::string& dir, const std::string& method, std::uint64_t seed,
+                     const std::vector<JudgedRow>& rows, const std::vector<DrawnCase>& cases) {
+    namespace fs = std::filesystem;
+    fs::create_directories(dir);
+    const fs::path path = fs::path(dir) / (method + ".csv");
+    const fs::path tmp = fs::path(dir) / (method + ".csv.tmp");
+    {
+        std::ofstream f(tmp);
+        f << "method,seed,case,what,refused,inside,nrmse,baseline,bound\n";
+        for (std::size_t i = 0; i < rows.size(); ++i) {
+            const JudgedRow& r = rows[i];
+            auto num = [](double x) { return std::isfinite(x) ? test_support::number(x) : std::string(); };
+            char error[32];
+            std::snprintf(error, sizeof error, "%.6g", r.error);
+            f << method << "," << seed << "," << cases[i].name << ",\"" << cases[i].what << "\"," << r.refused << ","
+              << r.inside << "," << (std::isfinite(r.error) ? error : "") << "," << num(r.baseline) << ","
+              << num(r.bound) << "\n";
+        }
+        ASSERT_TRUE(f.good()) << "could not write " << tmp;
+    }
+    fs::rename(tmp, path);
+    std::printf("cases written to %s\n", path.string().c_str());
+}
+
 // How many further cases of the default seed the mutation check may examine beyond the drawn ones.
 constexpr int kMutationExtraCases = 48;
 
@@ -121,6 +150,8 @@ TEST_P(ConformanceDrawn, MeetsItsClaimOnDrawnHardCases) {
         cases.push_back(std::move(c));
     }
     test_support::print_rows(rows);
+    if (const char* dir = std::getenv("CAUSTICS_CONFORMANCE_CSV_DIR"); dir && *dir)
+        write_cases_csv(dir, info.name, seed, rows, cases);
 
     int inside = 0, refused = 0;
     double worst = 0.0, worst_bound = NAN, claimed = 0.0;
