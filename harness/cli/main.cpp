@@ -5,7 +5,8 @@
 // carries the rest; dispatch.hpp parses and reports).
 //
 // Before anything else the program loads the method plugins in CAUSTICS_PLUGIN_PATH (plugins.hpp) and
-// refuses to start (exit 2) while two methods, built in or loaded, share a name.
+// refuses to start (exit 2) while two methods, built in or loaded, share a name. It fixes the heap's
+// limits first (util/heap_policy.hpp), so that a run's timing does not depend on the process's history.
 #include <cstdlib>
 #include <exception>
 #include <string>
@@ -19,9 +20,11 @@
 #include "usage_errors.hpp"
 #include <caustics/api/registry.hpp>
 #include <caustics/util/errors.hpp>
+#include <caustics/util/heap_policy.hpp>
 
 int main(int argc, char** argv) {
     using caustics::cli::report_error;
+    caustics::apply_heap_policy();
     try {
         if (const auto conflicts = caustics::registration_conflicts(); !conflicts.empty()) return report_error(conflicts.front(), 2);
         if (const char* plugins = std::getenv("CAUSTICS_PLUGIN_PATH")) caustics::cli::load_plugins(plugins);
