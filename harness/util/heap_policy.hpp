@@ -5,9 +5,9 @@
 // glibc's malloc adapts on its own: blocks from 128 KiB on are mapped fresh and unmapped on free, and
 // freed memory at the heap's top is returned to the system, until the first large block is freed, which
 // raises both limits for the rest of the process. A method that allocates large temporaries every frame
-// then pays a page fault per 4 KiB of them on every frame (about 15 us each on a virtual machine: 85 ms of
-// adaptive_beams' 120 ms beam generation on `sine`) in a fresh process, and nothing in a sweep worker whose
-// earlier runs raised the limits: the same run measured 3.6x slower by `caustics render` than inside the
+// then pays a page fault per 4 KiB of them on every frame (about 15 us each on a virtual machine: some 80 ms
+// of adaptive_beams' 120 ms beam generation on `sine`) in a fresh process, and nothing in a sweep worker
+// whose earlier runs raised the limits: the same run took 138 ms in `caustics render` and 46 ms inside the
 // quick sweep. Fixing the limits at start-up gives every run the warm heap a long-running renderer has
 // after its first frames (the warm-up frames then warm it for the timed ones).
 #include <cstddef>
