@@ -6,7 +6,9 @@
 // against the uniform 64 x 64 grid (beams and fill), and the tight hull against the prism (fill and time);
 // the second argument is the thread count (1 or 2); BM_VolumeView sweeps the volume view's levers
 // (volume_step, volume_subpixels: 1, 1 is the paper's one ray per pixel centre, 2, 2 the defaults);
-// BM_OracleAndSurface compares the split oracle and camera surface settings with the former defaults.
+// BM_OracleAndSurface compares the split oracle and camera surface settings with the former defaults;
+// BM_HeapPolicy times the defaults under glibc's default heap limits (0: a fresh process's, before the
+// adaptation util/heap_policy.hpp describes) and under the program's policy (1).
 #include <benchmark/benchmark.h>
 
 #include <map>
@@ -15,11 +17,16 @@
 
 #include <tbb/global_control.h>
 
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
+
 #include <caustics/api/registry.hpp>
 #include <caustics/frame/camera.hpp>
 #include <caustics/frame/frame.hpp>
 #include <caustics/frame/ray_tracer.hpp>
 #include <caustics/frame/receiver_chart.hpp>
+#include <caustics/util/heap_policy.hpp>
 
 using namespace caustics;
 
@@ -95,8 +102,21 @@ void BM_OracleAndSurface(benchmark::State& state) {
     run(state, params);
 }
 
+void BM_HeapPolicy(benchmark::State& state) {
+#if defined(__GLIBC__)
+    if (state.range(2) == 0) {
+        // glibc's initial limits (128 KiB), fixed so that they do not adapt during the benchmark.
+        mallopt(M_MMAP_THRESHOLD, 128 * 1024);
+        mallopt(M_TRIM_THRESHOLD, 128 * 1024);
+    }
+#endif
+    run(state, {});
+    apply_heap_policy();
+}
+
 }  // namespace
 
+BENCHMARK(BM_HeapPolicy)->ArgsProduct({{0, 1}, {2}, {0, 1}})->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true)->UseRealTime();
 BENCHMARK(BM_OracleAndSurface)->ArgsProduct({{0, 1}, {2}, {0, 1, 2}})->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true)->UseRealTime();
 BENCHMARK(BM_Adaptive)->ArgsProduct({{0, 1}, {1, 2}})->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true)->UseRealTime();
 BENCHMARK(BM_Uniform64)->ArgsProduct({{0, 1}, {2}})->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true)->UseRealTime();
