@@ -6,9 +6,9 @@
 // freed memory at the heap's top is returned to the system, until the first large block is freed, which
 // raises both limits for the rest of the process. A method that allocates large temporaries every frame
 // then pays a page fault per 4 KiB of them on every frame (about 15 us each on a virtual machine: some 80 ms
-// of adaptive_beams' 120 ms beam generation on `sine`) in a fresh process, and nothing in a sweep worker
-// whose earlier runs raised the limits: the same run took 138 ms in `caustics render` and 46 ms inside the
-// quick sweep. Fixing the limits at start-up gives every run the warm heap a long-running renderer has
+// of one method's 120 ms frame stage on `sine`) in a fresh process, and nothing in a sweep worker whose
+// earlier runs raised the limits: the same run took 138 ms in `caustics render` and 46 ms inside the quick
+// sweep. Fixing the limits at start-up gives every run the warm heap a long-running renderer has
 // after its first frames (the warm-up frames then warm it for the timed ones).
 #include <cstddef>
 
