@@ -5,6 +5,7 @@
 // irradiance), so its errors are known independently: compare_images on the two downsampled maps.
 #include <unistd.h>
 
+#include <deque>
 #include <filesystem>
 #include <memory>
 #include <stdexcept>
@@ -46,10 +47,10 @@ ViewSpec half_receiver_row() {
     v.size = [](const ViewSources& s) { return std::make_pair(s.chart->width() / 2, s.chart->height() / 2); };
     v.truth = [](const ViewSources& s, ViewTruth& t) {
         if (!s.analytic || !s.analytic->available) return false;
-        // Kept alive by the row: one truth per frame is enough for a test.
-        static Image truth;
-        truth = half(s.analytic->receiver);
-        t.maps = {&truth, nullptr, nullptr};
+        // A derived truth: the ViewTruth keeps it.
+        auto truth = std::make_shared<const Image>(half(s.analytic->receiver));
+        t.maps = {truth.get(), nullptr, nullptr};
+        t.owned.push_back(std::move(truth));
         t.kind = s.analytic->kind;
         return true;
     };
@@ -115,7 +116,7 @@ std::string scene_path(const std::string& name) { return std::string(CAUSTICS_SO
 
 TEST(ViewTable, BuiltInRowsThenRegisteredOnesAndNamesAreUnique) {
     ASSERT_TRUE(registered);
-    const std::vector<ViewSpec>& rows = view_table();
+    const std::deque<ViewSpec>& rows = view_table();
     ASSERT_EQ(rows.size(), 4u);
     EXPECT_EQ(rows[0].name, "receiver");
     EXPECT_TRUE(rows[0].primary);
@@ -175,7 +176,9 @@ TEST(ViewTable, RunMeasuresTheFourthView) {
     o.overrides = {{"half_view", "0"}};
     const RenderRun without = run_render(o);
     ASSERT_EQ(without.status, RunStatus::Ok) << without.message;
-    EXPECT_FALSE(without.metrics["error"].contains(kView));
+    // Not measured: its key is there, null, like a built-in view's.
+    ASSERT_TRUE(without.metrics["error"].contains(kView));
+    EXPECT_TRUE(without.metrics["error"][kView]["nrmse"].is_null());
     EXPECT_NE(without.message.find("method produced no receiver_half view"), std::string::npos) << without.message;
 
     // The wrong size is refused like a built-in view's, naming the view.
@@ -200,6 +203,15 @@ TEST(ViewTable, ViewerSessionMeasuresTheFourthView) {
     EXPECT_NEAR(it->second.json["nrmse"].get<double>(), expected_half_nrmse(s.scene()), 1e-6);
     ASSERT_TRUE(s.errors().receiver.has_value());
     EXPECT_TRUE(s.errors().receiver->have_baseline);
+
+    // A view of the wrong size is the session's status (the viewer shows it), not an exception that would
+    // end the viewer.
+    o.overrides = {{"bad_size", "1"}};
+    view::Session bad(o);
+    EXPECT_NO_THROW(bad.render());
+    EXPECT_EQ(bad.status().rfind("failed: ", 0), 0u) << bad.status();
+    EXPECT_NE(bad.status().find(kView), std::string::npos) << bad.status();
+    EXPECT_FALSE(bad.errors().receiver.has_value());
 }
 
 TEST(ViewTable, ConformanceJudgeMeasuresTheFourthView) {
@@ -221,6 +233,10 @@ TEST(ViewTable, ClaimBoundIsTheStatedErrorOrHalfTheBaselines) {
     EXPECT_FALSE(judge_claim(claim, 0.101, 1.0).met);
     EXPECT_DOUBLE_EQ(judge_claim(claim, 0.05, 0.12).bound, 0.06);
     EXPECT_FALSE(judge_claim(claim, 0.07, 0.12).met);
+    // A nearly flat truth: half the baseline's error would be below the 1 % floor, which holds instead.
+    EXPECT_DOUBLE_EQ(judge_claim(claim, 0.004, 0.01).bound, 0.01);
+    EXPECT_TRUE(judge_claim(claim, 0.009, 0.01).met);
+    EXPECT_DOUBLE_EQ(judge_claim(AccuracyClaim::within(0.005), 0.004, 0.008).bound, 0.005);
 }
 
 }  // namespace caustics

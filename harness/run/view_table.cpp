@@ -93,14 +93,14 @@ ViewSpec camera_volume_row() {
     return v;
 }
 
-std::vector<ViewSpec>& table() {
-    static std::vector<ViewSpec> rows = {receiver_row(), camera_row(), camera_volume_row()};
+std::deque<ViewSpec>& table() {
+    static std::deque<ViewSpec> rows = {receiver_row(), camera_row(), camera_volume_row()};
     return rows;
 }
 
 }  // namespace
 
-const std::vector<ViewSpec>& view_table() { return table(); }
+const std::deque<ViewSpec>& view_table() { return table(); }
 
 void register_view(ViewSpec spec) {
     for (const ViewSpec& v : table())
@@ -160,6 +160,9 @@ std::int64_t check_views(const CausticOutput& out, const ViewSources& sources, c
                                      std::to_string(image->channels) + ", expected " + std::to_string(w) + "x" +
                                      std::to_string(h) + "x1");
         const std::vector<std::uint8_t>* mask = v.read_mask ? v.read_mask(sources) : nullptr;
+        if (mask && mask->size() != image->pixels.size())
+            throw std::runtime_error("view " + v.name + ": its read mask has " + std::to_string(mask->size()) +
+                                     " entries for " + std::to_string(image->pixels.size()) + " pixels");
         for (std::size_t p = 0; p < image->pixels.size(); ++p)
             if ((!mask || (*mask)[p]) && !std::isfinite(image->pixels[p])) ++nonfinite;
     }

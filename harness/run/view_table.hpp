@@ -5,7 +5,9 @@
 // (run_method), the viewer (view/session) and the conformance suite evaluate views through this table
 // alone, so a further view is one row (register_view) plus the method's output in CausticOutput::views.
 #include <cstdint>
+#include <deque>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -17,9 +19,11 @@
 
 namespace caustics {
 
-// What a view is measured against on one frame; sources' images must outlive it.
+// What a view is measured against on one frame. `maps` points into the sources (which must outlive it) or
+// into `owned`, where a row keeps a truth it derives for this frame (a resampled or filtered image).
 struct ViewTruth {
     TruthMaps maps;
+    std::vector<std::shared_ptr<const Image>> owned;
     std::string kind;                   // "analytic:sine", "reference", ...
     std::vector<std::uint8_t> mask;     // pixels compared (empty: all)
     bool has_baseline = false;          // compare with a no-caustic baseline
@@ -69,8 +73,9 @@ struct ViewSpec {
     bool primary = false;
 };
 
-// The built-in rows (receiver, camera, camera_volume), then every registered one.
-const std::vector<ViewSpec>& view_table();
+// The built-in rows (receiver, camera, camera_volume), then every registered one. A deque: pointers to rows
+// stay valid when a row is added.
+const std::deque<ViewSpec>& view_table();
 // Adds a row (a view name already in the table is refused with std::invalid_argument). Not thread-safe:
 // register before runs start (at static initialisation, or at the start of a test).
 void register_view(ViewSpec spec);
@@ -104,7 +109,8 @@ std::vector<EvaluatedView> evaluate_views(const CausticOutput& out, const ViewSo
 
 // The claim's judgement (docs/conformance.md; metrics.json's claim.bound and claim.met): `error` is the plain
 // nrmse of the primary view (after the scale fit where the output is not radiometric) against the exact
-// truth; the bound is the claim's stated error or half the no-caustic baseline's, the smaller.
+// truth; the bound is AccuracyClaim::bound: the claim's stated error or half the no-caustic baseline's,
+// the smaller, but never below min(stated error, 0.01).
 struct ClaimJudgement {
     double bound = 0.0;
     bool met = false;

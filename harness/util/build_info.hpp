@@ -4,6 +4,6 @@
 namespace caustics {
 
 const char* build_type();        // CMAKE_BUILD_TYPE ("Release", ...) or "unknown"
-const char* project_version();   // the project's version ("0.1.0")
+const char* project_version();   // the project's version ("0.2.0")
 
 }  // namespace caustics

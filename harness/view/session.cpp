@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <stdexcept>
 #include <utility>
 #include <cmath>
 
@@ -182,7 +183,16 @@ void Session::refresh_errors(bool force) {
     status_ = "ok";
     if (!rendered_) return;
     // The run's checks and evaluation (run/view_table.hpp), against the newest reference.
-    if (check_views(output_, view_sources(*frame_, nullptr, nullptr), method_name()) > 0 || output_.health.get("nonfinite") > 0) {
+    // A wrong-sized image (a parameter change the method does not handle) is the session's status, not the
+    // viewer's end.
+    std::int64_t nonfinite = 0;
+    try {
+        nonfinite = check_views(output_, view_sources(*frame_, nullptr, nullptr), method_name());
+    } catch (const std::runtime_error& e) {
+        status_ = std::string("failed: ") + e.what();
+        return;
+    }
+    if (nonfinite > 0 || output_.health.get("nonfinite") > 0) {
         status_ = "unstable: non-finite output, error not measured";
         return;
     }
