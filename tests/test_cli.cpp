@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -211,11 +212,18 @@ TEST_F(CliTest, RenderWritesFilesAndKeys) {
     // A method compiled into the program has the program's build type.
     EXPECT_EQ(m["method_build_type"], m["build_type"]);
     for (const char* k : {"inside", "max_error", "bound", "reason", "bounds", "met"}) EXPECT_TRUE(m["claim"].contains(k)) << k;
-    for (const char* t : {"time_ms", "frame_ms"})
+    for (const char* t : {"time_ms", "frame_ms"}) {
         for (const char* k : {"median", "min", "p90", "stdev", "iqr", "ci_rel"}) {
             ASSERT_TRUE(m[t].contains(k)) << t << "." << k;
             EXPECT_TRUE(m[t][k].is_number()) << t << "." << k;
         }
+        // Every timed frame's time, in order: as many as the timed frames, their minimum the summary's.
+        ASSERT_TRUE(m[t]["samples"].is_array()) << t;
+        const std::vector<double> samples = m[t]["samples"].get<std::vector<double>>();
+        EXPECT_EQ(static_cast<int>(samples.size()), m["repeats"].get<int>()) << t;
+        ASSERT_FALSE(samples.empty());
+        EXPECT_NEAR(*std::min_element(samples.begin(), samples.end()), m[t]["min"].get<double>(), 6e-4) << t;
+    }
     for (const char* view : {"receiver", "camera", "camera_volume"})
         for (const char* k : {"nrmse", "relmse", "psnr", "ssim", "nrmse_fit", "fit_scale", "nrmse_net", "nrmse_net_lo",
                               "nrmse_net_hi", "relmse_net", "consistent_with_reference", "error_vs_baseline"})

@@ -7,6 +7,7 @@
 #include <caustics/run/run_errors.hpp>
 #include <caustics/run/scene_frame.hpp>
 #include <caustics/run/thread_limit.hpp>
+#include <caustics/run/view_table.hpp>
 #include <caustics/util/build_info.hpp>
 
 namespace caustics {
@@ -17,15 +18,26 @@ json json_number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); 
 
 json timing_json(const TimingSummary* t) {
     if (!t || t->samples == 0)
-        return {{"median", nullptr}, {"min", nullptr}, {"p90", nullptr}, {"stdev", nullptr}, {"iqr", nullptr}, {"ci_rel", nullptr}};
+        return {{"median", nullptr}, {"min", nullptr}, {"p90", nullptr}, {"stdev", nullptr}, {"iqr", nullptr}, {"ci_rel", nullptr},
+                {"samples", json::array()}};
     return {{"median", json_number(t->median)}, {"min", json_number(t->min)}, {"p90", json_number(t->p90)},
             {"stdev", json_number(t->stdev)}, {"iqr", json_number(t->iqr)},
-            {"ci_rel", t->has_interval ? json_number(t->ci_rel) : json(nullptr)}};
+            {"ci_rel", t->has_interval ? json_number(t->ci_rel) : json(nullptr)}, {"samples", json::array()}};
+}
+
+// Timed samples to the microsecond (the clock's useful resolution here), so that a run's samples stay a
+// short line of results.jsonl.
+json samples_json(const std::vector<double>& samples_ms) {
+    json out = json::array();
+    for (double ms : samples_ms) out.push_back(json_number(std::round(ms * 1000.0) / 1000.0));
+    return out;
 }
 
 void timing_to_json(const RunTiming& t, json& j) {
     j["time_ms"] = timing_json(&t.render);
+    j["time_ms"]["samples"] = samples_json(t.render_samples_ms);
     j["frame_ms"] = timing_json(&t.frame);
+    j["frame_ms"]["samples"] = samples_json(t.frame_samples_ms);
     j["frame_time"] = t.animated ? "update+render" : "render";
     j["fps"] = t.frame.median > 0.0 ? json_number(1000.0 / t.frame.median) : json(nullptr);
     j["render_fps"] = t.render.median > 0.0 ? json_number(1000.0 / t.render.median) : json(nullptr);
@@ -69,7 +81,9 @@ json metrics_skeleton(const SceneFrame& sf, const ResolvedMethod& m, const Rende
     j["update_ms"] = nullptr;
     j["stages_ms"] = json::object();
     j["threads"] = ThreadLimit::effective();
-    j["error"] = {{"receiver", null_view_errors()}, {"camera", null_view_errors()}, {"camera_volume", null_view_errors()}};
+    // Every view of the table (run/view_table.hpp), null until measured.
+    j["error"] = json::object();
+    for (const ViewSpec& v : view_table()) j["error"][v.name] = null_view_errors();
     j["reference"] = {{"photons", nullptr}, {"noise_nrmse", nullptr}, {"cache_key", nullptr}};
     j["truth"] = {{"kind", nullptr}, {"noise_nrmse", nullptr}};
     j["baseline"] = {{"kind", nullptr}, {"error", nullptr}};

@@ -64,6 +64,8 @@ RunTiming time_method(Method& method, const SceneFrame& sf, const RenderRequest&
     t.update_ms = t.animated ? summarize_ms(update_times).median : first_update_ms;
     for (auto& [stage, samples] : stage_times) t.stages_ms[stage] = summarize_ms(samples).median;
     t.repeats = static_cast<int>(render_times.size());
+    t.render_samples_ms = std::move(render_times);
+    t.frame_samples_ms = std::move(frame_times);
     return t;
 }
 

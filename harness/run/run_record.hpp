@@ -34,6 +34,9 @@ struct RunTiming {
     double update_ms = 0.0;                    // median per frame (animated) or the one update
     std::map<std::string, double> stages_ms;   // the method's stages, median per frame
     int repeats = 0;                           // timed frames
+    // Every timed frame's render and frame time in order (metrics.json's time_ms.samples and
+    // frame_ms.samples), so that two runs can be compared by a test on their samples, not only medians.
+    std::vector<double> render_samples_ms, frame_samples_ms;
 };
 
 // Times `method` on the frame; `last` receives the last timed render's output (the previous one is freed
