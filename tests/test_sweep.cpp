@@ -14,6 +14,7 @@
 #include <sstream>
 #include <thread>
 
+#include <caustics/run/machine_state.hpp>
 #include <caustics/util/errors.hpp>
 #include <caustics/sweep/sweep.hpp>
 #include <caustics/sweep/sweep_spec.hpp>
@@ -314,6 +315,45 @@ TEST(SweepCli, ResumeAfterKillKeepsFinishedRowsAndRunsEachOnce) {
     EXPECT_EQ(lines_of(read_file(out / "results.csv")).size(), 7u);
     for (const auto& [id, n] : seen) EXPECT_TRUE(fs::exists(out / "runs" / id / "metrics.json")) << id;
     EXPECT_TRUE(fs::exists(out / "manifest.json"));
+    // The machine's state: at the killed sweep's start (it never reached its end), and at the resumed
+    // part's start and end; `loaded` follows the rule from the recorded start.
+    const nlohmann::json manifest = nlohmann::json::parse(read_file(out / "manifest.json"));
+    const nlohmann::json& first = manifest["machine"];
+    EXPECT_TRUE(first["end"].is_null());
+    ASSERT_EQ(manifest["resumed"].size(), 1u);
+    const nlohmann::json& again = manifest["resumed"][0]["machine"];
+    for (const nlohmann::json* m : {&first["start"], &again["start"], &again["end"]}) {
+        ASSERT_TRUE((*m)["load_average"].is_array()) << m->dump();   // Linux shows /proc/loadavg
+        EXPECT_EQ((*m)["load_average"].size(), 3u);
+        EXPECT_GT((*m)["cores"].get<unsigned>(), 0u);
+    }
+    for (const nlohmann::json* m : {&first, &again}) {
+        MachineState start;
+        start.load1 = (*m)["start"]["load_average"][0].get<double>();
+        start.cores = (*m)["start"]["cores"].get<unsigned>();
+        EXPECT_EQ((*m)["loaded"].get<bool>(), machine_loaded(start));
+    }
+}
+
+TEST(MachineState, LoadAverageAndTheLoadedRule) {
+    double a = 0, b = 0, c = 0;
+    ASSERT_TRUE(parse_loadavg("0.52 1.10 2.00 3/245 12345", a, b, c));
+    EXPECT_DOUBLE_EQ(a, 0.52);
+    EXPECT_DOUBLE_EQ(b, 1.10);
+    EXPECT_DOUBLE_EQ(c, 2.00);
+    EXPECT_FALSE(parse_loadavg("", a, b, c));
+    EXPECT_FALSE(parse_loadavg("0.5 x 1", a, b, c));
+    EXPECT_FALSE(parse_loadavg("-1 0 0", a, b, c));
+    MachineState s;
+    s.cores = 2;
+    EXPECT_FALSE(machine_loaded(s)) << "no load average read: not flagged";
+    s.load1 = 0.99;
+    EXPECT_FALSE(machine_loaded(s));
+    s.load1 = 1.0;
+    EXPECT_TRUE(machine_loaded(s)) << "half the cores busy before the sweep";
+    const nlohmann::json j = machine_state_json(s);
+    EXPECT_TRUE(j["load_average"].is_array());
+    EXPECT_TRUE(j["governor"].is_null());
 }
 
 // An out-of-range axis value is a skipped run (with the parameter's valid range), a run past its time

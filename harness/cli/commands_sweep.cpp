@@ -30,6 +30,9 @@ int run_sweep_command(SweepOptions o) {
               << s.ok << " ok, " << s.skipped << " skipped, " << s.failed << " failed, " << s.unstable
               << " unstable)\n"
               << "wrote " << (fs::path(o.out_dir) / "results.csv").string() << "\n";
+    if (s.loaded)
+        std::cerr << "sweep: warning: the machine was busy as the sweep started (1-minute load average at least "
+                     "half the cores; manifest.json machine.start): its timings are not a quiet machine's\n";
     return 0;
 }
 

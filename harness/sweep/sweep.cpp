@@ -18,6 +18,7 @@
 #include <caustics/util/image_io.hpp>
 #include <caustics/api/registry.hpp>
 #include <caustics/run/render_run.hpp>
+#include <caustics/run/machine_state.hpp>
 #include <caustics/run/run_context.hpp>
 #include <caustics/sweep/worker.hpp>
 
@@ -359,8 +360,11 @@ SweepSummary run_sweep(const SweepOptions& options) {
         throw InputError("--resume", dir.string(),
                          "the sweep in this folder was started as " + shard_text(manifest.value("shard", json())) +
                              ", not as " + shard_text(shard) + "; resume it with the same --shard");
+    const MachineState machine_start = read_machine_state();
     if (manifest.empty()) {
         manifest = run_context();
+        manifest["machine"] = {{"start", machine_state_json(machine_start)}, {"end", nullptr},
+                               {"loaded", machine_loaded(machine_start)}};
         manifest["spec_path"] = options.spec_path;
         manifest["spec"] = spec.as_run;
         manifest["runs_planned"] = runs.size();
@@ -368,6 +372,8 @@ SweepSummary run_sweep(const SweepOptions& options) {
         if (const json slurm = slurm_environment(); !slurm.is_null()) manifest["slurm"] = slurm;
     } else {
         json resumed = run_context();
+        resumed["machine"] = {{"start", machine_state_json(machine_start)}, {"end", nullptr},
+                              {"loaded", machine_loaded(machine_start)}};
         resumed["spec_path"] = options.spec_path;
         resumed["run_mode"] = run_mode(options);
         if (const json slurm = slurm_environment(); !slurm.is_null()) resumed["slurm"] = slurm;
@@ -446,6 +452,11 @@ SweepSummary run_sweep(const SweepOptions& options) {
         write_text_atomic(jsonl.string(), joined(lines));
         write_text_atomic((dir / "results.csv").string(), results_csv(spec, rows));
     }
+    // The machine as the sweep ends (its own runs are part of this load), beside the start's.
+    json& machine = manifest.contains("resumed") ? manifest["resumed"].back()["machine"] : manifest["machine"];
+    machine["end"] = machine_state_json(read_machine_state());
+    write_text_atomic((dir / "manifest.json").string(), manifest.dump(2) + "\n");
+    summary.loaded = machine_loaded(machine_start);
     return summary;
 }
 

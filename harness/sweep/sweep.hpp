@@ -62,6 +62,7 @@ std::string run_mode(const SweepOptions& options);
 struct SweepSummary {
     std::size_t total = 0, done_before = 0, ran = 0, ok = 0, skipped = 0, failed = 0, unstable = 0;
     std::size_t references = 0;   // references computed or found (--references-only)
+    bool loaded = false;          // the machine was busy as the sweep started (manifest.json machine.loaded)
 };
 
 // Throws InputError for a bad spec, a sweep of more than kMaxRunsWithoutConfirmation runs without --yes

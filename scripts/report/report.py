@@ -24,11 +24,35 @@ import volume  # noqa: E402
 from load import read_manifest, read_results  # noqa: E402
 
 
+def machine_line(manifest):
+    """How busy the machine was (manifest.json "machine", and each resumed part's): the 1-minute load average
+    at the start and end of each part, the governor, and a warning for a part that started on a busy
+    machine. Empty for sweeps that did not record it."""
+    parts = [manifest.get("machine")] + [r.get("machine") for r in manifest.get("resumed", [])]
+    parts = [p for p in parts if isinstance(p, dict)]
+    if not parts:
+        return ""
+
+    def load(state):
+        values = (state or {}).get("load_average")
+        return f"{values[0]:.2f}" if isinstance(values, list) and values else "?"
+
+    spans = "; ".join(f"{load(p.get('start'))} at the start, {load(p.get('end'))} at the end" for p in parts)
+    governor = (parts[0].get("start") or {}).get("governor")
+    line = f"Load (1-minute average): {spans}" + (f"; CPU governor {governor}." if governor else ".")
+    if any(p.get("loaded") for p in parts):
+        line += (" **Warning: the machine was busy as the sweep started (load at least half the cores): "
+                 "its timings are not a quiet machine's.**")
+    return line
+
+
 def context_line(manifest):
     host = manifest.get("host", {})
-    return (f"Machine: {host.get('cpu', '?')}, {host.get('cores', '?')} cores, "
+    line = (f"Machine: {host.get('cpu', '?')}, {host.get('cores', '?')} cores, "
             f"{manifest.get('threads', '?')} threads, {manifest.get('build_type', '?')} build, "
             f"commit {manifest.get('git_commit', '?')}.")
+    machine = machine_line(manifest)
+    return line + (" " + machine if machine else "")
 
 
 def main(argv):

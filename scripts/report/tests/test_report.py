@@ -310,3 +310,23 @@ class TimeVsErrorAxesTest(unittest.TestCase):
 
 if __name__ == "__main__":
     unittest.main()
+
+
+class MachineLineTest(unittest.TestCase):
+    def test_load_at_start_and_end_and_the_busy_warning(self):
+        import report
+
+        quiet = {"start": {"load_average": [0.12, 0.3, 0.4], "governor": "performance", "cores": 2},
+                 "end": {"load_average": [1.9, 1.0, 0.6], "cores": 2}, "loaded": False}
+        line = report.machine_line({"machine": quiet})
+        self.assertIn("0.12 at the start, 1.90 at the end", line)
+        self.assertIn("governor performance", line)
+        self.assertNotIn("Warning", line)
+        busy = dict(quiet, loaded=True)
+        # A resumed part that started on a busy machine flags the sweep; a part cut off has no end.
+        line = report.machine_line({"machine": dict(quiet, end=None), "resumed": [{"machine": busy}]})
+        self.assertIn("0.12 at the start, ? at the end; 0.12 at the start, 1.90 at the end", line)
+        self.assertIn("Warning: the machine was busy", line)
+        self.assertEqual(report.machine_line({}), "")   # sweeps that did not record it
+        self.assertIn("Machine:", report.context_line({"machine": busy}))
+        self.assertIn("Warning", report.context_line({"machine": busy}))
