@@ -318,3 +318,35 @@ TEST_F(CliTest, ListJsonDocumentsEveryParameter) {
     EXPECT_EQ(text.code, 0);
     EXPECT_NE(text.out.find("caustic_triangles"), std::string::npos);
 }
+
+
+// `caustics compare`: a folder that is not a sweep is refused (exit 2, one line naming results.jsonl, nothing
+// written); a sweep compared with itself is the same everywhere, so even the CI gate passes, and the
+// comparison's files are written (scripts/report/tests/test_compare.py tests the statistics).
+TEST_F(CliTest, CompareRefusesANonSweepAndFindsASweepEqualToItself) {
+    const fs::path empty = fs::path(out_dir()) / "not_a_sweep";
+    fs::create_directories(empty);
+    Result r = run({"compare", empty.string(), empty.string(), "--out", (fs::path(out_dir()) / "cmp").string()});
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_NE(r.err.find("results.jsonl"), std::string::npos) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_FALSE(fs::exists(fs::path(out_dir()) / "cmp"));
+
+    const fs::path spec = dir_ / "compare_spec.json";
+    std::ofstream(spec) << R"({"scenes": ["sine"], "truth": "analytic", "reference": {"photons": 20000},
+        "timing": {"warmup": 0, "repeats": 3, "precision": 1, "max_time_s": 0.2},
+        "methods": {"caustic_triangles": {"grid": [16, 24]}}})";
+    const fs::path sweep = fs::path(out_dir()) / "sweep";
+    r = run({"sweep", spec.string(), "--out", sweep.string(), "--cache", cache_dir()});
+    ASSERT_EQ(r.code, 0) << r.err;
+    const fs::path cmp = fs::path(out_dir()) / "cmp";
+    r = run({"compare", sweep.string(), sweep.string(), "--out", cmp.string(), "--fail-on-regression"});
+    EXPECT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("2 matched runs, 0 slower or worse"), std::string::npos) << r.out;
+    for (const char* f : {"compare.md", "compare.csv", "compare_time_vs_error.png"})
+        EXPECT_TRUE(fs::is_regular_file(cmp / f)) << f;
+    EXPECT_NE(slurp(cmp / "compare.csv").find("SAME,"), std::string::npos);
+    r = run({"compare", sweep.string(), sweep.string(), "--alpha", "2"});
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_NE(r.err.find("--alpha"), std::string::npos) << r.err;
+}

@@ -328,9 +328,11 @@ TEST(SweepCli, ResumeAfterKillKeepsFinishedRowsAndRunsEachOnce) {
         EXPECT_GT((*m)["cores"].get<unsigned>(), 0u);
     }
     for (const nlohmann::json* m : {&first, &again}) {
+        ASSERT_TRUE((*m)["start"]["busy"].is_number());   // Linux shows /proc/stat
+        const double busy = (*m)["start"]["busy"].get<double>();
+        EXPECT_TRUE(busy >= 0.0 && busy <= 1.0) << busy;
         MachineState start;
-        start.load1 = (*m)["start"]["load_average"][0].get<double>();
-        start.cores = (*m)["start"]["cores"].get<unsigned>();
+        start.busy = busy;
         EXPECT_EQ((*m)["loaded"].get<bool>(), machine_loaded(start));
     }
 }
@@ -344,14 +346,25 @@ TEST(MachineState, LoadAverageAndTheLoadedRule) {
     EXPECT_FALSE(parse_loadavg("", a, b, c));
     EXPECT_FALSE(parse_loadavg("0.5 x 1", a, b, c));
     EXPECT_FALSE(parse_loadavg("-1 0 0", a, b, c));
+    std::uint64_t total = 0, idle = 0;
+    ASSERT_TRUE(parse_cpu_times("cpu  100 5 50 800 45 0 3 0 0 0", total, idle));
+    EXPECT_EQ(total, 1003u);
+    EXPECT_EQ(idle, 845u);
+    EXPECT_FALSE(parse_cpu_times("cpu0 1 2 3 4", total, idle));
+    EXPECT_FALSE(parse_cpu_times("cpu 1 2", total, idle));
     MachineState s;
     s.cores = 2;
-    EXPECT_FALSE(machine_loaded(s)) << "no load average read: not flagged";
+    EXPECT_FALSE(machine_loaded(s)) << "nothing read: not flagged";
     s.load1 = 0.99;
     EXPECT_FALSE(machine_loaded(s));
     s.load1 = 1.0;
-    EXPECT_TRUE(machine_loaded(s)) << "half the cores busy before the sweep";
+    EXPECT_TRUE(machine_loaded(s)) << "without a busy sample: half the cores' load";
+    s.busy = 0.1;
+    EXPECT_FALSE(machine_loaded(s)) << "the busy sample decides: a trailing load average is not busy now";
+    s.busy = 0.5;
+    EXPECT_TRUE(machine_loaded(s));
     const nlohmann::json j = machine_state_json(s);
+    EXPECT_DOUBLE_EQ(j["busy"].get<double>(), 0.5);
     EXPECT_TRUE(j["load_average"].is_array());
     EXPECT_TRUE(j["governor"].is_null());
 }

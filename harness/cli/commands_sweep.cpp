@@ -31,8 +31,8 @@ int run_sweep_command(SweepOptions o) {
               << " unstable)\n"
               << "wrote " << (fs::path(o.out_dir) / "results.csv").string() << "\n";
     if (s.loaded)
-        std::cerr << "sweep: warning: the machine was busy as the sweep started (1-minute load average at least "
-                     "half the cores; manifest.json machine.start): its timings are not a quiet machine's\n";
+        std::cerr << "sweep: warning: the machine was busy as the sweep started (its CPUs at least half busy with other "
+                     "work; manifest.json machine.start): its timings are not a quiet machine's\n";
     return 0;
 }
 

@@ -9,6 +9,7 @@
 #include <cerrno>
 #include <filesystem>
 #include <fstream>
+#include <locale>
 #include <set>
 #include <sstream>
 #include <vector>
@@ -109,6 +110,33 @@ int run_report(const std::string& dir) {
         throw InputError(script.string(), "", "the report script is missing; valid: an installation or build tree "
                                               "with scripts/report/ in its data folder (or set CAUSTICS_DATA_DIR)");
     return run_tied_child({python, script.string(), dir}, false);
+}
+
+int run_compare(const CompareOptions& o) {
+    for (const std::string& dir : {o.base, o.new_dir})
+        if (!fs::is_regular_file(fs::path(dir) / "results.jsonl"))
+            throw InputError(dir, "results.jsonl", "not a sweep folder; valid: a folder `caustics sweep` wrote (or merged)");
+    const std::string python = find_plotting_python();
+    if (python.empty())
+        throw InputError("compare", "python3",
+                         "no python3 with matplotlib, pandas, numpy and OpenImageIO; run scripts/setup.sh");
+    const fs::path script = data_directory() / "scripts" / "report" / "compare.py";
+    if (!fs::is_regular_file(script))
+        throw InputError(script.string(), "", "the compare script is missing; valid: an installation or build tree "
+                                              "with scripts/report/ in its data folder (or set CAUSTICS_DATA_DIR)");
+    auto number = [](double v) {
+        std::ostringstream s;
+        s.imbue(std::locale::classic());
+        s.precision(17);
+        s << v;
+        return s.str();
+    };
+    std::vector<std::string> argv = {python, script.string(), o.base, o.new_dir, "--alpha", number(o.alpha),
+                                     "--time-threshold", number(o.time_threshold), "--error-threshold",
+                                     number(o.error_threshold)};
+    if (!o.out.empty()) argv.insert(argv.end(), {"--out", o.out});
+    if (o.fail_on_regression) argv.push_back("--fail-on-regression");
+    return run_tied_child(argv, false);
 }
 
 }  // namespace caustics

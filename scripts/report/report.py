@@ -33,16 +33,18 @@ def machine_line(manifest):
     if not parts:
         return ""
 
-    def load(state):
-        values = (state or {}).get("load_average")
-        return f"{values[0]:.2f}" if isinstance(values, list) and values else "?"
+    def state(s):
+        s = s or {}
+        busy, values = s.get("busy"), s.get("load_average")
+        text = f"{busy:.0%} busy" if isinstance(busy, (int, float)) else "?"
+        return text + (f" (load {values[0]:.2f})" if isinstance(values, list) and values else "")
 
-    spans = "; ".join(f"{load(p.get('start'))} at the start, {load(p.get('end'))} at the end" for p in parts)
+    spans = "; ".join(f"{state(p.get('start'))} at the start, {state(p.get('end'))} at the end" for p in parts)
     governor = (parts[0].get("start") or {}).get("governor")
-    line = f"Load (1-minute average): {spans}" + (f"; CPU governor {governor}." if governor else ".")
+    line = f"CPUs: {spans}" + (f"; governor {governor}." if governor else ".")
     if any(p.get("loaded") for p in parts):
-        line += (" **Warning: the machine was busy as the sweep started (load at least half the cores): "
-                 "its timings are not a quiet machine's.**")
+        line += (" **Warning: the machine was busy as the sweep started (its CPUs at least half busy with other "
+                 "work): its timings are not a quiet machine's.**")
     return line
 
 

@@ -316,16 +316,16 @@ class MachineLineTest(unittest.TestCase):
     def test_load_at_start_and_end_and_the_busy_warning(self):
         import report
 
-        quiet = {"start": {"load_average": [0.12, 0.3, 0.4], "governor": "performance", "cores": 2},
-                 "end": {"load_average": [1.9, 1.0, 0.6], "cores": 2}, "loaded": False}
+        quiet = {"start": {"busy": 0.04, "load_average": [0.12, 0.3, 0.4], "governor": "performance", "cores": 2},
+                 "end": {"busy": 0.1, "load_average": [1.9, 1.0, 0.6], "cores": 2}, "loaded": False}
         line = report.machine_line({"machine": quiet})
-        self.assertIn("0.12 at the start, 1.90 at the end", line)
+        self.assertIn("4% busy (load 0.12) at the start, 10% busy (load 1.90) at the end", line)
         self.assertIn("governor performance", line)
         self.assertNotIn("Warning", line)
         busy = dict(quiet, loaded=True)
         # A resumed part that started on a busy machine flags the sweep; a part cut off has no end.
         line = report.machine_line({"machine": dict(quiet, end=None), "resumed": [{"machine": busy}]})
-        self.assertIn("0.12 at the start, ? at the end; 0.12 at the start, 1.90 at the end", line)
+        self.assertIn("at the start, ? at the end; 4% busy (load 0.12) at the start, 10% busy", line)
         self.assertIn("Warning: the machine was busy", line)
         self.assertEqual(report.machine_line({}), "")   # sweeps that did not record it
         self.assertIn("Machine:", report.context_line({"machine": busy}))
