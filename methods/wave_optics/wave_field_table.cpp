@@ -27,6 +27,17 @@ inline int wrap(int i, int n) {
     return i < 0 ? i + n : i;
 }
 
+// Bilinear value of a row-major table (rows of `stride`) between columns xa, xb and rows ya, yb.
+inline float bilinear_texel(const float* t, int stride, int xa, int xb, int ya, int yb, float ax, float ay) {
+    const float v00 = t[static_cast<std::size_t>(ya) * stride + xa];
+    const float v10 = t[static_cast<std::size_t>(ya) * stride + xb];
+    const float v01 = t[static_cast<std::size_t>(yb) * stride + xa];
+    const float v11 = t[static_cast<std::size_t>(yb) * stride + xb];
+    const float top = v00 + ax * (v10 - v00);
+    const float bottom = v01 + ax * (v11 - v01);
+    return top + ay * (bottom - top);
+}
+
 }  // namespace
 
 WaveFieldTable::WaveFieldTable(int nx, int ny, bool rgb) : nx_(nx), ny_(ny), rgb_(rgb) {
@@ -256,16 +267,7 @@ void WaveFieldTable::lookup(const LookupGeometry& geo, const std::vector<ShadePo
             const double facing = std::max(0.0, -glm::dot(geo.refracted, p.normal)) / cos_t;
             const float scale = static_cast<float>(geo.irradiance * std::exp(-geo.absorption * z / cos_t) * facing);
             for (int c = 0; c < channels; ++c) {
-                auto bilinear = [&](int s) {
-                    const float* t = slice(s, c);
-                    const float v00 = t[static_cast<std::size_t>(ya) * nx_ + xa];
-                    const float v10 = t[static_cast<std::size_t>(ya) * nx_ + xb];
-                    const float v01 = t[static_cast<std::size_t>(yb) * nx_ + xa];
-                    const float v11 = t[static_cast<std::size_t>(yb) * nx_ + xb];
-                    const float top = v00 + ax * (v10 - v00);
-                    const float bottom = v01 + ax * (v11 - v01);
-                    return top + ay * (bottom - top);
-                };
+                auto bilinear = [&](int s) { return bilinear_texel(slice(s, c), nx_, xa, xb, ya, yb, ax, ay); };
                 float v = bilinear(sa);
                 if (sb != sa) v += as * (bilinear(sb) - v);
                 values[k][c] = scale * v;
@@ -284,10 +286,6 @@ void fill_periodic_texture(const WaveFieldTable& table, int n, const LookupGeome
     const double dx = geo.lx / n, dy = geo.ly / n;
     const double cos_t = std::max(1e-9, -geo.refracted.z);
     const float scale = static_cast<float>(geo.irradiance * std::exp(-geo.absorption * z / cos_t));
-    auto wrap = [](int i, int m) {
-        i %= m;
-        return i < 0 ? i + m : i;
-    };
     tbb::parallel_for(tbb::blocked_range<int>(0, H, 8), [&](const tbb::blocked_range<int>& r) {
         for (int j = r.begin(); j < r.end(); ++j) {
             const double ty = ((j + 0.5) * geo.ly / H - z * geo.walk.y) / dy;
@@ -299,16 +297,7 @@ void fill_periodic_texture(const WaveFieldTable& table, int n, const LookupGeome
                 const double fxf = std::floor(tx);
                 const float ax = static_cast<float>(tx - fxf);
                 const int xa = wrap(static_cast<int>(fxf), n), xb = wrap(xa + 1, n);
-                auto bilinear = [&](int c) {
-                    const float* t = table.slice(0, c);
-                    const float v00 = t[static_cast<std::size_t>(ya) * n + xa];
-                    const float v10 = t[static_cast<std::size_t>(ya) * n + xb];
-                    const float v01 = t[static_cast<std::size_t>(yb) * n + xa];
-                    const float v11 = t[static_cast<std::size_t>(yb) * n + xb];
-                    const float top = v00 + ax * (v10 - v00);
-                    const float bottom = v01 + ax * (v11 - v01);
-                    return top + ay * (bottom - top);
-                };
+                auto bilinear = [&](int c) { return bilinear_texel(table.slice(0, c), n, xa, xb, ya, yb, ax, ay); };
                 mono.at(i, j) = scale * bilinear(0);
                 if (rgb != nullptr)
                     for (int c = 0; c < 3; ++c) rgb->at(i, j, c) = scale * bilinear(c + 1);
