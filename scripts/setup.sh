@@ -7,7 +7,7 @@ PACKAGES=(
   build-essential cmake ninja-build pkg-config git clang libclang-rt-14-dev
   libembree-dev libopenimageio-dev libopenexr-dev libtinygltf-dev libglm-dev libtbb-dev libfftw3-dev
   nlohmann-json3-dev libcli11-dev libgtest-dev libbenchmark-dev libglfw3-dev libimgui-dev xvfb
-  python3 python3-matplotlib python3-pandas python3-numpy python3-openimageio
+  python3 python3-matplotlib python3-pandas python3-numpy python3-openimageio chromium
   slurm-wlm munge
 )
 

@@ -18,6 +18,7 @@ except ImportError as error:  # say which module is missing and where it comes f
              f"(scripts/setup.sh does) and run with /usr/bin/python3")
 
 import figures  # noqa: E402
+import html_report  # noqa: E402
 import quality  # noqa: E402
 import tables  # noqa: E402
 import volume  # noqa: E402
@@ -130,6 +131,7 @@ def main(argv):
     with open(path + ".tmp", "w") as f:
         f.write("\n".join(out) + "\n")
     os.replace(path + ".tmp", path)
+    html_report.write_html(sweep_dir, frame, scenes, context, chosen, fig_dir)
     print(path)
 
 

@@ -110,6 +110,23 @@ class OldSweepReportTest(unittest.TestCase):
             self.assertIn("raw nrmse (this sweep has no net error)", report)
             self.assertNotIn("no-caustic baseline |", report)  # no baseline column, so no baseline row
             self.assertNotIn(".tmp", " ".join(os.listdir(os.path.join(d, "figures"))))
+            # report.html beside it: self-contained (every image a PNG data URI, nothing from the network),
+            # with the sortable runs table and the truth-against-method comparison.
+            import base64
+            import html as html_module
+            import re
+
+            with open(os.path.join(d, "report.html")) as f:
+                page = f.read()
+            self.assertIsNone(re.search(r'(src|href)="(https?:)?//', page))
+            uris = re.findall(r'data:image/png;base64,([A-Za-z0-9+/=]+)', html_module.unescape(page))
+            self.assertGreaterEqual(len(uris), 1 + 2 * 3)   # the figure; truth, method and difference maps
+            for uri in uris:
+                self.assertEqual(base64.b64decode(uri)[:8], b"\x89PNG\r\n\x1a\n")
+            self.assertIn('class="imagebox"', page)
+            self.assertIn('type="range" class="wipe"', page)
+            self.assertIn("<th>grid</th>", page)
+            self.assertIn("relative_method (fit)", page)
 
 
 
