@@ -232,4 +232,46 @@ TEST(PluginFaults, NotASharedLibraryIsNamed) {
 INSTANTIATE_TEST_SUITE_P(Modes, SweepFaults, testing::Values(false, true),
                          [](const testing::TestParamInfo<bool>& info) { return info.param ? "Isolated" : "Worker"; });
 
+// `caustics compare` on real sweeps (scripts/report/compare.py): a method with a known cost (sweep_fault's
+// busy-wait of 8 ms a frame) run again by the same build is SAME; run by a build with a 20 % slowdown
+// injected (SWEEP_FAULT_SLOWDOWN=1.2) it is SLOWER, and the CI gate fails with exit status 3. A busy-wait
+// keeps its wall time on a loaded machine, so the verdicts do not depend on the machine's drift.
+TEST(SweepCompare, AnInjectedSlowdownIsSlowerAndARepeatIsSame) {
+    const caustics::test_support::ScopedTempDir d("caustics_test_sweep_compare");
+    fs::create_directories(d.path());
+    const fs::path spec = d.path() / "spec.json";
+    std::ofstream(spec) << R"({
+      "scenes": ["sine"], "truth": "analytic", "reference": {"photons": 20000},
+      "timing": {"warmup": 1, "repeats": 10, "precision": 0.01, "max_time_s": 0.3, "timeout_s": 60},
+      "methods": {"sweep_fault": {"work_ms": [8]}}
+    })";
+    const std::string plugins = "CAUSTICS_PLUGIN_PATH=" + quote(CAUSTICS_TEST_PLUGIN_DIR);
+    const auto sweep = [&](const std::string& name, const std::string& env) {
+        const fs::path out = d.path() / name;
+        EXPECT_EQ(run_caustics("sweep " + quote(spec.string()) + " --out " + quote(out.string()) + " --cache " +
+                                   quote((d.path() / "cache").string()),
+                               d.path() / ("log_" + name), plugins + env),
+                  0)
+            << slurp(d.path() / ("log_" + name));
+        return out;
+    };
+    const fs::path base = sweep("base", ""), again = sweep("again", ""), slow = sweep("slow", " SWEEP_FAULT_SLOWDOWN=1.2");
+    const auto verdict = [&](const fs::path& a, const fs::path& b, const std::string& name, const std::string& flags) {
+        const fs::path out = d.path() / ("cmp_" + name);
+        const int code = run_caustics("compare " + quote(a.string()) + " " + quote(b.string()) + " --out " +
+                                          quote(out.string()) + flags,
+                                      d.path() / ("log_cmp_" + name));
+        const std::string csv = slurp(out / "compare.csv");
+        return std::make_pair(code, csv);
+    };
+    const auto [same_code, same_csv] = verdict(base, again, "again", " --fail-on-regression");
+    EXPECT_EQ(same_code, 0) << same_csv;
+    EXPECT_NE(same_csv.find(",SAME,"), std::string::npos) << same_csv;
+    const auto [slow_code, slow_csv] = verdict(base, slow, "slow", "");
+    EXPECT_EQ(slow_code, 0) << slow_csv;
+    EXPECT_NE(slow_csv.find(",SLOWER,"), std::string::npos) << slow_csv;
+    const auto [gate_code, gate_csv] = verdict(base, slow, "gate", " --fail-on-regression");
+    EXPECT_EQ(gate_code, 3) << gate_csv;
+}
+
 }  // namespace

@@ -5,6 +5,8 @@
 // outlives it by 8 s and holds every descriptor it had (in a worker: the socket to the sweep), then dies
 // of SIGSEGV: the sweep must see the death without waiting for EOF. The fault strikes inside render(), in
 // the timed region, after the scene, the frame and the method's preparation have succeeded.
+// work_ms > 0 makes render() busy-wait that long (times SWEEP_FAULT_SLOWDOWN, default 1, read once from the
+// environment): a known cost, and a build with an injected slowdown, for `caustics compare`'s tests.
 #include <chrono>
 #include <csignal>
 #include <cstdlib>
@@ -25,7 +27,8 @@ using namespace caustics;
 
 class SweepFault final : public Method {
 public:
-    explicit SweepFault(std::string fault) : fault_(std::move(fault)) {
+    SweepFault(std::string fault, double work_ms) : fault_(std::move(fault)), work_ms_(work_ms) {
+        if (const char* f = std::getenv("SWEEP_FAULT_SLOWDOWN")) work_ms_ *= std::atof(f);
         if (fault_ == "create") throw std::runtime_error("sweep_fault: asked to fail on create");
     }
 
@@ -40,6 +43,9 @@ public:
         if (fault_ == "abort") std::abort();
         if (fault_ == "hang")
             while (true) std::this_thread::sleep_for(std::chrono::seconds(1));
+        const auto start = std::chrono::steady_clock::now();
+        while (std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count() < work_ms_) {
+        }
         return {};
     }
 
@@ -49,6 +55,7 @@ public:
 
 private:
     std::string fault_;
+    double work_ms_ = 0.0;
 };
 
 MethodInfo info() {
@@ -60,9 +67,10 @@ MethodInfo info() {
         {"grid", ParamType::Int, "1", 1, 1, {}, "no grid (only 1 is valid)"},
         {"iterations", ParamType::Int, "1", 1, 1, {}, "nothing iterates (only 1 is valid)"},
         {"fault", ParamType::Enum, "none", 0, 0, {"none", "segv", "abort", "hang", "fork_segv", "create"}, "how it fails"},
+        {"work_ms", ParamType::Float, "0", 0, 1000, {}, "busy-wait this long per render (times SWEEP_FAULT_SLOWDOWN)"},
     };
     m.create = [](const ParamSet& p) -> std::unique_ptr<Method> {
-        return std::make_unique<SweepFault>(p.get_enum("fault"));
+        return std::make_unique<SweepFault>(p.get_enum("fault"), p.get_float("work_ms"));
     };
     return m;
 }
