@@ -8,8 +8,8 @@ too). Per pair:
   error  the difference of the net errors (receiver; fitted for relative output) with an interval from the
          two runs' replica intervals (half-widths added in quadrature; 0 against an exact truth): WORSE or
          BETTER when the interval excludes 0 and the change is beyond error_threshold of the base's error.
-Writes OUT/compare.md, OUT/compare.csv and OUT/compare_time_vs_error.png (each written to a temporary name
-and renamed). Exit status: 0; 3 with --fail-on-regression when a pair is SLOWER or WORSE; 2 for bad input
+Writes OUT/compare.md, OUT/compare.csv, OUT/compare_time_vs_error.png and OUT/compare.html (the same as one
+self-contained page; each file written to a temporary name and renamed). Exit status: 0; 3 with --fail-on-regression when a pair is SLOWER or WORSE; 2 for bad input
 (one line on stderr, nothing written).
 """
 import argparse
@@ -275,6 +275,43 @@ def figure(pairs, path):
     fig.savefig(buf, format="png", dpi=120)
     plt.close(fig)
     write_atomically(path, buf.getvalue(), binary=True)
+    return buf.getvalue()
+
+
+def html_page(pairs, only_base, only_new, mb, mn, warnings, args, figure_png):
+    """compare.html: the same comparison as one self-contained page (the figure embedded, the table sortable,
+    each run's parameters on hover), with report.html's style and script."""
+    import html
+
+    from html_report import SCRIPT, STYLE, png_uri
+
+    esc = html.escape
+    varied = varied_parameters(pairs)
+    rows = []
+    for p in pairs:
+        params = json.loads(p["params"])
+        shown = ", ".join(f"{k}={v}" for k, v in params.items() if k in varied[p["method"]])
+        tip = esc(", ".join(f"{k}={v}" for k, v in params.items()))
+        cells = [p["scene"], p["frame"], p["method"]]
+        rows.append("<tr>" + "".join(f'<td class="text">{esc(str(c))}</td>' for c in cells) +
+                    f'<td class="text" title="{tip}">{esc(shown)}</td>' +
+                    "".join(f"<td>{esc(str(v))}</td>" for v in (
+                        p["time"], _fmt(p["time_ratio"], ".3f"), _fmt(p["time_p"], ".2g"), p["error"],
+                        _fmt(p["base_error"], ".4g"), _fmt(p["new_error"], ".4g"))) + "</tr>")
+    head = "".join(f"<th>{h}</th>" for h in ("scene", "frame", "method", "parameters varied", "time", "ratio", "p",
+                                             "error", "base error", "new error"))
+    unmatched = "".join(f"<li>{esc(label)}: {esc(str(k[0]))} frame {k[1]} {esc(k[2])} {esc(k[3])}</li>"
+                        for label, keys in (("only in the base", only_base), ("only in the new sweep", only_new))
+                        for k in keys)
+    return ("<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>Sweep comparison</title>"
+            f"<style>{STYLE}</style><script>{SCRIPT}</script></head><body><h1>Sweep comparison</h1>"
+            f"<p>Base: <code>{esc(args.base)}</code> (commit {esc(str(mb.get('git_commit', '?')))}); new: "
+            f"<code>{esc(args.new)}</code> (commit {esc(str(mn.get('git_commit', '?')))}). Alpha {args.alpha}, time "
+            f"threshold {args.time_threshold:.0%}, error threshold {args.error_threshold:.0%}.</p>"
+            + "".join(f"<p><strong>Warning:</strong> {esc(w)}.</p>" for w in warnings)
+            + f'<figure><img alt="time ratio against error ratio" src="{png_uri(figure_png)}"></figure>'
+            f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(rows)}</tbody></table>"
+            + (f"<ul>{unmatched}</ul>" if unmatched else "") + "</body></html>\n")
 
 
 def main(argv=None):
@@ -308,7 +345,9 @@ def main(argv=None):
     warnings = manifest_warnings(mb, mn)
     write_atomically(os.path.join(out, "compare.md"), markdown(pairs, only_base, only_new, mb, mn, warnings, args))
     write_atomically(os.path.join(out, "compare.csv"), csv_text(pairs))
-    figure(pairs, os.path.join(out, "compare_time_vs_error.png"))
+    png = figure(pairs, os.path.join(out, "compare_time_vs_error.png"))
+    write_atomically(os.path.join(out, "compare.html"),
+                     html_page(pairs, only_base, only_new, mb, mn, warnings, args, png))
     regressions = [p for p in pairs if p["time"] == "SLOWER" or p["error"] == "WORSE"]
     for w in warnings:
         print(f"compare: warning: {w}", file=sys.stderr)

@@ -3,7 +3,7 @@
 # (Debian's chromium, installed by scripts/setup.sh). Passes when the page names no network resource, loads
 # without console errors, every image decodes and the comparison's slider and difference toggle change the
 # shown image (the page's own #selftest, run by the browser, writes the verdict into its title); a
-# screenshot is left in OUT/report_html.png.
+# screenshot is left in OUT/report_html.png. compare.html (`caustics compare`) must load the same way.
 #
 # Usage: browser_test.sh CAUSTICS_BINARY OUT_DIR
 set -euo pipefail
@@ -33,4 +33,10 @@ if grep -E 'CONSOLE|Uncaught' "$out/console.log"; then fail "console messages (s
 timeout 120 "$browser" "${flags[@]}" --window-size=1200,1600 --screenshot="$out/report_html.png" "file://$page" \
   > /dev/null 2>&1 || fail "no screenshot"
 [ "$(stat -c %s "$out/report_html.png")" -gt 10000 ] || fail "the screenshot is empty"
+# compare.html (`caustics compare`, the sweep against itself) loads with its figure and without console messages.
+"$bin" compare "$out/sweep" "$out/sweep" --out "$out/compare" > "$out/compare.log" 2>&1 || fail "compare (see $out/compare.log)"
+dom=$(timeout 120 "$browser" "${flags[@]}" --enable-logging=stderr --v=0 --dump-dom "file://$out/compare/compare.html" \
+        2> "$out/compare_console.log")
+[[ $dom == *"<title>Sweep comparison</title>"* && $dom == *"data:image/png;base64,"* ]] || fail "compare.html did not load"
+if grep -E 'CONSOLE|Uncaught' "$out/compare_console.log"; then fail "console messages (see $out/compare_console.log)"; fi
 echo "report_html: ok; screenshot $out/report_html.png"

@@ -108,6 +108,19 @@ class CompareSweepsTest(unittest.TestCase):
         self.assertIn("gone", md)
         self.assertIn("Only in the new sweep (1)", md)
         self.assertTrue(os.path.getsize(os.path.join(self.out, "compare_time_vs_error.png")) > 1000)
+        # The page: self-contained (the figure a PNG data URI, nothing from the network), every pair a row.
+        import base64
+        import re
+
+        with open(os.path.join(self.out, "compare.html")) as f:
+            page = f.read()
+        self.assertIsNone(re.search(r'(src|href)="(https?:)?//', page))
+        uris = re.findall(r'data:image/png;base64,([A-Za-z0-9+/=]+)', page)
+        self.assertEqual(len(uris), 1)
+        self.assertEqual(base64.b64decode(uris[0])[:8], b"\x89PNG\r\n\x1a\n")
+        self.assertEqual(page.count("<tr>"), 1 + 4)
+        self.assertIn("SLOWER", page)
+        self.assertIn("only in the base", page)
         self.assertIn("1 only in the base", out)
         # A CI gate: the regressions give exit status 3.
         code, _, _ = self.run_compare("--fail-on-regression")
