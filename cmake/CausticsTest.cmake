@@ -8,6 +8,9 @@
 # children the tests start: ASan halts on its first error by default, and undefined behaviour is compiled
 # with -fno-sanitize-recover (CMakeLists.txt), so UBSan halts too. Leak checking stays off: TBB's and
 # Embree's worker pools outlive main.
+#
+# Cases that compare timings must not share the machine with other tests: where CAUSTICS_SERIAL_<program>
+# holds a GoogleTest filter, the cases it matches are discovered apart and run alone (RUN_SERIAL).
 find_package(GTest REQUIRED)
 include(GoogleTest)
 # ctest's time limit per case: 600 s, three times that under the sanitizers, whose instrumented code runs
@@ -24,6 +27,13 @@ function(caustics_add_gtest source)
   target_compile_definitions(${name} PRIVATE CAUSTICS_BINARY="$<TARGET_FILE:caustics>"
                              CAUSTICS_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
   add_dependencies(${name} caustics)
-  gtest_discover_tests(${name} WORKING_DIRECTORY ${PROJECT_SOURCE_DIR} DISCOVERY_TIMEOUT 60
-                       PROPERTIES ${CAUSTICS_TEST_PROPERTIES})
+  if(DEFINED CAUSTICS_SERIAL_${name})
+    gtest_discover_tests(${name} WORKING_DIRECTORY ${PROJECT_SOURCE_DIR} DISCOVERY_TIMEOUT 60
+                         TEST_FILTER "-${CAUSTICS_SERIAL_${name}}" PROPERTIES ${CAUSTICS_TEST_PROPERTIES})
+    gtest_discover_tests(${name} WORKING_DIRECTORY ${PROJECT_SOURCE_DIR} DISCOVERY_TIMEOUT 60
+                         TEST_FILTER "${CAUSTICS_SERIAL_${name}}" PROPERTIES ${CAUSTICS_TEST_PROPERTIES} RUN_SERIAL TRUE)
+  else()
+    gtest_discover_tests(${name} WORKING_DIRECTORY ${PROJECT_SOURCE_DIR} DISCOVERY_TIMEOUT 60
+                         PROPERTIES ${CAUSTICS_TEST_PROPERTIES})
+  endif()
 endfunction()
