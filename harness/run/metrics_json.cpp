@@ -16,15 +16,6 @@ using nlohmann::json;
 
 json json_number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 
-json timing_json(const TimingSummary* t) {
-    if (!t || t->samples == 0)
-        return {{"median", nullptr}, {"min", nullptr}, {"p90", nullptr}, {"stdev", nullptr}, {"iqr", nullptr}, {"ci_rel", nullptr},
-                {"samples", json::array()}};
-    return {{"median", json_number(t->median)}, {"min", json_number(t->min)}, {"p90", json_number(t->p90)},
-            {"stdev", json_number(t->stdev)}, {"iqr", json_number(t->iqr)},
-            {"ci_rel", t->has_interval ? json_number(t->ci_rel) : json(nullptr)}, {"samples", json::array()}};
-}
-
 // Timed samples to the microsecond (the clock's useful resolution here), so that a run's samples stay a
 // short line of results.jsonl.
 json samples_json(const std::vector<double>& samples_ms) {
@@ -33,11 +24,18 @@ json samples_json(const std::vector<double>& samples_ms) {
     return out;
 }
 
+json timing_json(const TimingSummary* t, const std::vector<double>& samples_ms) {
+    if (!t || t->samples == 0)
+        return {{"median", nullptr}, {"min", nullptr}, {"p90", nullptr}, {"stdev", nullptr}, {"iqr", nullptr}, {"ci_rel", nullptr},
+                {"samples", json::array()}};
+    return {{"median", json_number(t->median)}, {"min", json_number(t->min)}, {"p90", json_number(t->p90)},
+            {"stdev", json_number(t->stdev)}, {"iqr", json_number(t->iqr)},
+            {"ci_rel", t->has_interval ? json_number(t->ci_rel) : json(nullptr)}, {"samples", samples_json(samples_ms)}};
+}
+
 void timing_to_json(const RunTiming& t, json& j) {
-    j["time_ms"] = timing_json(&t.render);
-    j["time_ms"]["samples"] = samples_json(t.render_samples_ms);
-    j["frame_ms"] = timing_json(&t.frame);
-    j["frame_ms"]["samples"] = samples_json(t.frame_samples_ms);
+    j["time_ms"] = timing_json(&t.render, t.render_samples_ms);
+    j["frame_ms"] = timing_json(&t.frame, t.frame_samples_ms);
     j["frame_time"] = t.animated ? "update+render" : "render";
     j["fps"] = t.frame.median > 0.0 ? json_number(1000.0 / t.frame.median) : json(nullptr);
     j["render_fps"] = t.render.median > 0.0 ? json_number(1000.0 / t.render.median) : json(nullptr);

@@ -15,7 +15,8 @@ namespace caustics {
 nlohmann::json json_number(double v);
 
 // metrics.json's timing block of one timed section (all null for none).
-nlohmann::json timing_json(const TimingSummary* t);
+// `samples_ms`: every timed frame, written to the microsecond (empty where not timed).
+nlohmann::json timing_json(const TimingSummary* t, const std::vector<double>& samples_ms = {});
 
 // The timed region's keys of metrics.json (time_ms, frame_ms, frame_time, fps, render_fps, noisy_timing,
 // prepare_ms, update_ms, stages_ms, repeats) from the typed record.

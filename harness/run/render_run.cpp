@@ -76,9 +76,10 @@ void judge_views(const std::vector<EvaluatedView>& views, const AccuracyClaim& c
             // multiple of its error to ask).
             if (claim.inside && e.have_baseline && v.exact_truth && e.baseline_error > 1e-3) {
                 const char* key = radiometric ? "nrmse" : "nrmse_fit";
-                j["claim"]["bound"] = json_number(claim.bound(e.baseline_error));
-                if (e.json.contains(key) && e.json[key].is_number())
-                    j["claim"]["met"] = judge_claim(claim, e.json[key].get<double>(), e.baseline_error).met;
+                const bool measured = e.json.contains(key) && e.json[key].is_number();
+                const ClaimJudgement c = judge_claim(claim, measured ? e.json[key].get<double>() : NAN, e.baseline_error);
+                j["claim"]["bound"] = json_number(c.bound);
+                if (measured) j["claim"]["met"] = c.met;
             }
             if (e.net.valid && e.have_baseline) j["no_better_than_flat"] = e.no_better_than_flat;
         }

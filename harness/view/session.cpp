@@ -206,13 +206,6 @@ void Session::refresh_errors(bool force) {
         if (v.spec->primary) errors_.truth_kind = v.truth_kind;
         errors_.by_view[v.spec->name] = std::move(v.errors);
     }
-    const auto view = [&](const char* name) -> std::optional<ViewErrors> {
-        const auto it = errors_.by_view.find(name);
-        return it == errors_.by_view.end() ? std::nullopt : std::optional<ViewErrors>(it->second);
-    };
-    errors_.receiver = view("receiver");
-    errors_.camera = view("camera");
-    errors_.volume = view("camera_volume");
     if (reference_) {
         errors_.photons = reference_->photons;
         if (errors_.truth_kind.empty()) errors_.truth_kind = "reference";

@@ -51,7 +51,11 @@ struct RenderTiming {
 // reference's noise where the truth is Monte Carlo).
 struct LiveErrors {
     std::map<std::string, ViewErrors> by_view;   // every measured view, by view-table row name
-    std::optional<ViewErrors> receiver, camera, volume;   // the built-in rows' (volume: camera_volume)
+    // The view's errors, null where it was not measured.
+    const ViewErrors* view(const std::string& name) const {
+        const auto it = by_view.find(name);
+        return it == by_view.end() ? nullptr : &it->second;
+    }
     std::string truth_kind;         // "analytic:sine", "reference" or "" (none yet)
     std::uint64_t photons = 0;      // of the reference the errors were measured against
 };

@@ -21,6 +21,8 @@ import tempfile
 
 import numpy as np
 
+from load import machine_parts
+
 KEY_FIELDS = ("scene", "frame", "method")
 
 
@@ -172,8 +174,7 @@ def manifest_warnings(mb, mn):
         if a is not None and b is not None and a != b:
             warnings.append(f"{label} differs: {a} (base) against {b} (new)")
     for side, m in (("base", mb), ("new", mn)):
-        parts = [m.get("machine")] + [r.get("machine") for r in m.get("resumed", [])]
-        if any(isinstance(p, dict) and p.get("loaded") for p in parts):
+        if any(p.get("loaded") for p in machine_parts(m)):
             warnings.append(f"the {side} sweep started on a busy machine (manifest.json machine.loaded)")
     return warnings
 

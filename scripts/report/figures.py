@@ -268,8 +268,11 @@ def _chosen_runs(runs, chosen):
     return picks
 
 
-def image_grid(frame, scene, directory, sweep_dir, chosen):
-    """Reference | each method | signed difference (one shared, labelled colour bar), like Shah Fig. 6-7."""
+def chosen_receiver_maps(frame, scene, sweep_dir, chosen):
+    """The receiver truth of a scene and each method's chosen run against it (None where the sweep has no
+    truth map or no run map): a dict with `truth`, `truth_title`, `ref_dir`, `frame_no`, `maps` ((run, map)
+    pairs, maps scaled by the run's fit where it is not radiometric), `diffs` (map - truth) and `limit` (the
+    99.5th percentile of |diff| over all runs, the shared scale of the differences)."""
     runs = ok_runs(frame[frame["scene"] == scene])
     if runs.empty:
         return None
@@ -278,22 +281,31 @@ def image_grid(frame, scene, directory, sweep_dir, chosen):
     ref_dir = os.path.join(sweep_dir, "references", f"{scene}-f{frame_no}")
     # The receiver truth the errors were measured against: the analytic closed form where the sweep wrote
     # one (zero noise), else the Monte Carlo reference.
-    reference = read_image(os.path.join(ref_dir, "truth_receiver.exr"))
+    truth = read_image(os.path.join(ref_dir, "truth_receiver.exr"))
     truth_title = "analytic truth"
-    if reference is None:
-        reference = read_image(os.path.join(ref_dir, "reference_receiver.exr"))
+    if truth is None:
+        truth = read_image(os.path.join(ref_dir, "reference_receiver.exr"))
         truth_title = "reference"
-    if reference is None:
+    if truth is None:
         return None
-    maps = run_images(sweep_dir, picks, "receiver.exr", reference.shape)
+    maps = run_images(sweep_dir, picks, "receiver.exr", truth.shape)
     if not maps:
         return None
-    norm, irradiance_label = irradiance_norm(reference)
-    diffs = []
-    for p, m in maps:
-        fit = 1.0 if p["radiometric"] else float(p.get("fit_scale", 1.0))
-        diffs.append(m * fit - reference)
+    maps = [(p, m * (1.0 if p["radiometric"] else float(p.get("fit_scale", 1.0)))) for p, m in maps]
+    diffs = [m - truth for _, m in maps]
     limit = max(float(np.percentile(np.abs(d), 99.5)) for d in diffs) or 1.0
+    return {"truth": truth, "truth_title": truth_title, "ref_dir": ref_dir, "frame_no": frame_no, "maps": maps,
+            "diffs": diffs, "limit": limit}
+
+
+def image_grid(frame, scene, directory, sweep_dir, chosen):
+    """Reference | each method | signed difference (one shared, labelled colour bar), like Shah Fig. 6-7."""
+    c = chosen_receiver_maps(frame, scene, sweep_dir, chosen)
+    if c is None:
+        return None
+    reference, truth_title, ref_dir, frame_no = c["truth"], c["truth_title"], c["ref_dir"], c["frame_no"]
+    maps, diffs, limit = c["maps"], c["diffs"], c["limit"]
+    norm, irradiance_label = irradiance_norm(reference)
     n = len(maps)
     beauty = [os.path.join(sweep_dir, "runs", p["run_id"], "beauty.png") for p, _ in maps]
     rows = 3 if any(os.path.exists(b) for b in beauty) else 2
@@ -301,8 +313,7 @@ def image_grid(frame, scene, directory, sweep_dir, chosen):
     im = axes[0][0].imshow(reference, cmap=irradiance_cmap(), norm=norm, origin="lower")
     axes[0][0].set_title(truth_title, fontsize=9)
     for i, (p, m) in enumerate(maps, start=1):
-        fit = 1.0 if p["radiometric"] else float(p.get("fit_scale", 1.0))
-        axes[0][i].imshow(m * fit, cmap=irradiance_cmap(), norm=norm, origin="lower")
+        axes[0][i].imshow(m, cmap=irradiance_cmap(), norm=norm, origin="lower")
         title = p["label"] + f"\ngrid {int(p['grid'])}, {p['frame_ms']:.2f} ms"
         axes[0][i].set_title(title, fontsize=8)
         dm = axes[1][i].imshow(diffs[i - 1], cmap="RdBu_r", vmin=-limit, vmax=limit, origin="lower")

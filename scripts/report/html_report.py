@@ -19,8 +19,7 @@ import os
 
 import numpy as np
 
-from figures import _chosen_runs, irradiance_cmap
-from load import ok_runs, read_image, run_images
+from figures import chosen_receiver_maps, irradiance_cmap
 
 STYLE = """
 body { font-family: sans-serif; margin: 1.5em; max-width: 1200px; }
@@ -126,19 +125,10 @@ def image_comparison(frame, scene, sweep_dir, chosen):
     """The comparison block of a scene (None where the sweep has no truth map or run maps)."""
     from matplotlib import colors
 
-    runs = ok_runs(frame[frame["scene"] == scene])
-    if runs.empty:
+    c = chosen_receiver_maps(frame, scene, sweep_dir, chosen)
+    if c is None:
         return None
-    picks = _chosen_runs(runs, chosen)
-    ref_dir = os.path.join(sweep_dir, "references", f"{scene}-f{int(picks[0]['frame'])}")
-    truth = read_image(os.path.join(ref_dir, "truth_receiver.exr"))
-    if truth is None:
-        truth = read_image(os.path.join(ref_dir, "reference_receiver.exr"))
-    if truth is None:
-        return None
-    maps = run_images(sweep_dir, picks, "receiver.exr", truth.shape)
-    if not maps:
-        return None
+    truth, maps, diffs, limit = c["truth"], c["maps"], c["diffs"], c["limit"]
     top = float(np.percentile(truth, 99.9)) or 1.0
     positive = truth[truth > 0]
     floor = float(np.percentile(positive, 1)) if positive.size else top * 1e-3
@@ -146,20 +136,14 @@ def image_comparison(frame, scene, sweep_dir, chosen):
               "log": colors.LogNorm(max(floor, top * 1e-4), top, clip=True)}
     cmap = irradiance_cmap()
     data = {"truth": {k: png_uri(map_png(np.maximum(truth, 1e-30), n, cmap)) for k, n in scales.items()}, "runs": {}}
-    diffs = []
-    for p, m in maps:
-        fit = 1.0 if p["radiometric"] else float(p.get("fit_scale", 1.0))
-        diffs.append(m * fit - truth)
-    limit = max(float(np.percentile(np.abs(d), 99.5)) for d in diffs) or 1.0
     diff_norm = colors.Normalize(-limit, limit, clip=True)
     import matplotlib
 
     diff_cmap = matplotlib.colormaps["RdBu_r"]
     options = []
     for (p, m), d in zip(maps, diffs):
-        fit = 1.0 if p["radiometric"] else float(p.get("fit_scale", 1.0))
         title = f"{p['label']}, {p['frame_ms']:.2f} ms, error {p['error']:.3g}"
-        entry = {k: png_uri(map_png(np.maximum(m * fit, 1e-30), n, cmap)) for k, n in scales.items()}
+        entry = {k: png_uri(map_png(np.maximum(m, 1e-30), n, cmap)) for k, n in scales.items()}
         entry["diff"] = png_uri(map_png(d, diff_norm, diff_cmap))
         entry["title"] = title
         data["runs"][p["run_id"]] = entry

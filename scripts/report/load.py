@@ -75,6 +75,12 @@ def read_manifest(directory):
         return json.load(f)
 
 
+def machine_parts(manifest):
+    """The machine states a sweep recorded (manifest.json "machine", then each resumed part's), dicts only."""
+    parts = [manifest.get("machine")] + [r.get("machine") for r in manifest.get("resumed", [])]
+    return [p for p in parts if isinstance(p, dict)]
+
+
 def read_image(path):
     """Single-channel float image as a 2-D numpy array, or None if the file is missing."""
     if not os.path.exists(path):

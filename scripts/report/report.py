@@ -22,15 +22,14 @@ import html_report  # noqa: E402
 import quality  # noqa: E402
 import tables  # noqa: E402
 import volume  # noqa: E402
-from load import read_manifest, read_results  # noqa: E402
+from load import machine_parts, read_manifest, read_results  # noqa: E402
 
 
 def machine_line(manifest):
     """How busy the machine was (manifest.json "machine", and each resumed part's): the 1-minute load average
     at the start and end of each part, the governor, and a warning for a part that started on a busy
     machine. Empty for sweeps that did not record it."""
-    parts = [manifest.get("machine")] + [r.get("machine") for r in manifest.get("resumed", [])]
-    parts = [p for p in parts if isinstance(p, dict)]
+    parts = machine_parts(manifest)
     if not parts:
         return ""
 

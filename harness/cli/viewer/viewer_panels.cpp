@@ -264,9 +264,9 @@ void Viewer::write_screenshot(const std::string& path, int width, int height, do
                                        {"photons_per_second", st.photons_per_second}, {"from_cache", st.from_cache},
                                        {"done", st.done}}}};
     const auto& e = session_->errors();
-    if (e.receiver && e.receiver->net.valid) j["error_receiver_nrmse_net"] = e.receiver->net.value;
-    if (e.camera && e.camera->net.valid) j["error_camera_nrmse_net"] = e.camera->net.value;
-    if (e.volume && e.volume->net.valid) j["error_volume_nrmse_net"] = e.volume->net.value;
+    for (const auto& [key, view] : {std::pair{"error_receiver_nrmse_net", "receiver"}, std::pair{"error_camera_nrmse_net", "camera"},
+                                    std::pair{"error_volume_nrmse_net", "camera_volume"}})
+        if (const ViewErrors* v = e.view(view); v && v->net.valid) j[key] = v->net.value;
     write_text_atomic(path + ".json", j.dump(2) + "\n");
 }
 
