@@ -168,6 +168,7 @@ void accumulate_camera(const BeamSet& set, const Scene& scene, const CameraGBuff
         stats.clamped += vs.clamped;
         stats.volume_rays += vs.rays;
         stats.volume_refined += vs.refined;
+        stats.volume_edge_pixels += vs.edge_pixels;
         stats.volume_ms += clock.ms();
     }
 }

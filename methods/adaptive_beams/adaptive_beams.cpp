@@ -41,6 +41,7 @@ public:
         acc_.volume.step = static_cast<int>(p.get_int("volume_step"));
         acc_.volume.refine = p.get_float("volume_refine");
         acc_.volume.subpixels = static_cast<int>(p.get_int("volume_subpixels"));
+        acc_.volume.edge_subpixels = static_cast<int>(p.get_int("volume_edge_subpixels"));
         acc_.receiver_samples = static_cast<int>(p.get_int("receiver_samples"));
         acc_.filter = static_cast<int>(p.get_int("filter"));
         acc_.surface_coverage = p.get_enum("camera_surface") == "coverage";
@@ -103,6 +104,7 @@ public:
         out.health.add("prism_fallback", stats.prism_fallback);
         out.health.add("volume_rays", stats.volume_rays);
         out.health.add("volume_refined", stats.volume_refined);
+        out.health.add("volume_edge_pixels", stats.volume_edge_pixels);
         out.health.add("coverage_beams", stats.coverage_beams);
         std::int64_t nonfinite = 0;
         for (Image* img : {&out.receiver, &out.camera, &out.camera_volume})
@@ -185,6 +187,10 @@ MethodInfo method_info() {
         {"volume_subpixels", ParamType::Int, "2", 1, 16, {},
          "camera_volume: rays per side of a fully evaluated pixel of a refined block (stratified over the pixel's "
          "square, each to its own first hit: the box filter at the light cone's edges; 1: the centre, the paper)"},
+        {"volume_edge_subpixels", ParamType::Int, "1", 1, 16, {},
+         "camera_volume: rays per side of a refined pixel whose sub-rays' radiances spread by more than "
+         "volume_refine of their mean (a hull's edge crosses it: the light cone's surface); at most "
+         "volume_subpixels: no second pass"},
         {"receiver_samples", ParamType::Int, "3", 1, 8, {},
          "point-in-beam samples per side of each receiver bin (their mean is the bin's mean irradiance)"},
         {"camera_surface", ParamType::Enum, "coverage", 0, 0, {"coverage", "point"},

@@ -29,6 +29,7 @@ struct Pass {
     std::vector<double> s_max;
     std::vector<std::vector<int>> columns;
     bool box = false;   // rays anywhere in the pixel's square: walk the pixels the hulls overlap
+    std::vector<double>* ray_value = nullptr;   // when set: each ray's radiance, indexed as dir
 };
 
 double gbuffer_depth(const CameraGBuffer& g, const CameraModel& cam, std::size_t i) {
@@ -65,9 +66,12 @@ void evaluate(const Pass& pass, const std::vector<VolumeBeam>& beams, const Came
                             const std::size_t i = g.index(*it, y);
                             const auto r = static_cast<std::size_t>(pass.first[i]);
                             double sum = 0.0;
-                            for (int q = 0; q < pass.per_pixel; ++q)
-                                sum += vb.beam->radiance(pass.dir[r + q], pass.s_max[r + q], samples, counters,
-                                                         kVolumeNearDistance);
+                            for (int q = 0; q < pass.per_pixel; ++q) {
+                                const double v = vb.beam->radiance(pass.dir[r + q], pass.s_max[r + q], samples,
+                                                                   counters, kVolumeNearDistance);
+                                sum += v;
+                                if (pass.ray_value) (*pass.ray_value)[r + q] += v;
+                            }
                             out[i] += pass.per_pixel > 1 ? sum / pass.per_pixel : sum;
                             ++st.fill;
                             st.rays += pass.per_pixel;
@@ -96,6 +100,77 @@ std::vector<int> lattice(int n, int step) {
     for (int x = 0; x < n; x += step) v.push_back(x);
     if (v.back() != n - 1) v.push_back(n - 1);
     return v;
+}
+
+// The pixels `want` as the mean of sub x sub stratified rays through their squares, each ray to its own
+// first hit (without a tracer: to its pixel's depth), added to out[pixel]. The rays are made, traced and
+// integrated in bands of rows of at most kChunkRays rays (at least one row: 16 x 16 sub-rays of a
+// 4,096-pixel row are 32 MB), so that memory stays bounded. With `edge` set, a pixel whose rays' radiances
+// spread by more than `refine` of their mean is marked in it.
+template <class Want>
+void box_pass(const Want& want, int sub, const std::vector<VolumeBeam>& beams, const CameraModel& cam,
+              const CameraGBuffer& g, const RayTracer* tracer, int samples, std::vector<double>& out,
+              std::vector<std::uint8_t>* edge, double refine, VolumeStats& stats) {
+    const int W = g.width, H = g.height;
+    const std::size_t np = static_cast<std::size_t>(W) * static_cast<std::size_t>(H);
+    const std::size_t per_pixel = static_cast<std::size_t>(sub) * static_cast<std::size_t>(sub);
+    Pass full;
+    full.per_pixel = sub * sub;
+    full.box = sub > 1;
+    full.first.assign(np, -1);
+    full.columns.resize(static_cast<std::size_t>(H));
+    std::vector<double> ray_value;
+    if (edge && sub > 1) full.ray_value = &ray_value;
+    int y_next = 0;
+    while (y_next < H) {
+        const int y_begin = y_next;
+        full.dir.clear();
+        full.s_max.clear();
+        for (; y_next < H && (y_next == y_begin || full.dir.size() + per_pixel * static_cast<std::size_t>(W) <= kChunkRays);
+             ++y_next) {
+            std::vector<int>& cols = full.columns[static_cast<std::size_t>(y_next)];
+            for (int x = 0; x < W; ++x) {
+                const std::size_t i = g.index(x, y_next);
+                if (!want(i)) continue;
+                cols.push_back(x);
+                full.first[i] = static_cast<int>(full.dir.size());
+                const double depth = gbuffer_depth(g, cam, i);   // the end of a ray when no tracer is given
+                for (int a = 0; a < sub; ++a)
+                    for (int b = 0; b < sub; ++b) {
+                        full.dir.push_back(cam.ray_direction(x + (b + 0.5) / sub, y_next + (a + 0.5) / sub));
+                        full.s_max.push_back(depth);
+                    }
+            }
+        }
+        if (sub > 1 && tracer)
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, full.dir.size(), kTraceBatch),
+                              [&](const tbb::blocked_range<std::size_t>& r) {
+                std::array<RayQuery, kTraceBatch> q;
+                std::array<Hit, kTraceBatch> hits;
+                for (std::size_t k0 = r.begin(); k0 < r.end(); k0 += kTraceBatch) {
+                    const std::size_t n = std::min(kTraceBatch, r.end() - k0);
+                    for (std::size_t k = 0; k < n; ++k) q[k].origin = cam.position, q[k].dir = full.dir[k0 + k];
+                    tracer->intersect(q.data(), n, hits.data());
+                    for (std::size_t k = 0; k < n; ++k) full.s_max[k0 + k] = hits[k].valid ? hits[k].t : kNoHit;
+                }
+            });
+        if (full.ray_value) ray_value.assign(full.dir.size(), 0.0);
+        if (!full.dir.empty()) evaluate(full, beams, g, samples, out, stats);
+        // The band's rows leave the pass: the next band's indices start again at 0.
+        for (int y = y_begin; y < y_next; ++y) {
+            for (int x : full.columns[static_cast<std::size_t>(y)]) {
+                const std::size_t i = g.index(x, y);
+                if (full.ray_value) {
+                    const auto r = static_cast<std::size_t>(full.first[i]);
+                    const auto [lo, hi] = std::minmax_element(ray_value.begin() + static_cast<std::ptrdiff_t>(r),
+                                                              ray_value.begin() + static_cast<std::ptrdiff_t>(r + per_pixel));
+                    (*edge)[i] = *hi - *lo > refine * out[i] ? 1 : 0;
+                }
+                full.first[i] = -1;
+            }
+            full.columns[static_cast<std::size_t>(y)].clear();
+        }
+    }
 }
 
 }  // namespace
@@ -184,57 +259,22 @@ void render_volume(const std::vector<VolumeBeam>& beams, const CameraModel& cam,
         }
     });
 
-    // Refined pixels, each as the mean of sub x sub stratified rays (centre rays: nodes are done). The
-    // rays are made, traced and integrated in bands of rows of at most kChunkRays rays (at least one row:
-    // 16 x 16 sub-rays of a 4,096-pixel row are 32 MB), so that memory stays bounded.
+    // Refined pixels, each as the mean of sub x sub stratified rays (centre rays: nodes are done); with
+    // sub > 1, a refined pixel whose sub-rays differ by more than `refine` of their mean has a hull's edge
+    // (the light cone's) inside it, and is evaluated again with edge_sub x edge_sub rays.
     std::vector<double> full_value(np, 0.0);
     // With centre rays a refined node keeps its node value (the same ray).
     auto in_full = [&](std::size_t i) { return refined[i] && (sub > 1 || nodes.first[i] < 0); };
-    const std::size_t per_pixel = static_cast<std::size_t>(sub) * static_cast<std::size_t>(sub);
-    Pass full;
-    full.per_pixel = sub * sub;
-    full.box = sub > 1;
-    full.first.assign(np, -1);
-    full.columns.resize(static_cast<std::size_t>(H));
-    int y_next = 0;
-    while (y_next < H) {
-        const int y_begin = y_next;
-        full.dir.clear();
-        full.s_max.clear();
-        for (; y_next < H && (y_next == y_begin || full.dir.size() + per_pixel * static_cast<std::size_t>(W) <= kChunkRays);
-             ++y_next) {
-            std::vector<int>& cols = full.columns[static_cast<std::size_t>(y_next)];
-            for (int x = 0; x < W; ++x) {
-                const std::size_t i = g.index(x, y_next);
-                if (!in_full(i)) continue;
-                cols.push_back(x);
-                full.first[i] = static_cast<int>(full.dir.size());
-                const double depth = gbuffer_depth(g, cam, i);   // the end of a ray when no tracer is given
-                for (int a = 0; a < sub; ++a)
-                    for (int b = 0; b < sub; ++b) {
-                        full.dir.push_back(cam.ray_direction(x + (b + 0.5) / sub, y_next + (a + 0.5) / sub));
-                        full.s_max.push_back(depth);
-                    }
-            }
-        }
-        if (sub > 1 && tracer)
-            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, full.dir.size(), kTraceBatch),
-                              [&](const tbb::blocked_range<std::size_t>& r) {
-                std::array<RayQuery, kTraceBatch> q;
-                std::array<Hit, kTraceBatch> hits;
-                for (std::size_t k0 = r.begin(); k0 < r.end(); k0 += kTraceBatch) {
-                    const std::size_t n = std::min(kTraceBatch, r.end() - k0);
-                    for (std::size_t k = 0; k < n; ++k) q[k].origin = cam.position, q[k].dir = full.dir[k0 + k];
-                    tracer->intersect(q.data(), n, hits.data());
-                    for (std::size_t k = 0; k < n; ++k) full.s_max[k0 + k] = hits[k].valid ? hits[k].t : kNoHit;
-                }
-            });
-        if (!full.dir.empty()) evaluate(full, beams, g, s.samples, full_value, stats);
-        // The band's rows leave the pass: the next band's indices start again at 0.
-        for (int y = y_begin; y < y_next; ++y) {
-            for (int x : full.columns[static_cast<std::size_t>(y)]) full.first[g.index(x, y)] = -1;
-            full.columns[static_cast<std::size_t>(y)].clear();
-        }
+    const int edge_sub = std::max(sub, s.edge_subpixels);
+    std::vector<std::uint8_t> edge(edge_sub > sub ? np : 0, 0);
+    box_pass(in_full, sub, beams, cam, g, tracer, s.samples, full_value, edge_sub > sub ? &edge : nullptr, s.refine,
+             stats);
+    if (edge_sub > sub) {
+        std::vector<double> edge_value(np, 0.0);
+        box_pass([&](std::size_t i) { return edge[i] != 0; }, edge_sub, beams, cam, g, tracer, s.samples, edge_value,
+                 nullptr, s.refine, stats);
+        for (std::size_t i = 0; i < np; ++i)
+            if (edge[i]) full_value[i] = edge_value[i], ++stats.edge_pixels;
     }
 
     // Compose: refined pixels, nodes, and the bilinear interpolation of the rest.

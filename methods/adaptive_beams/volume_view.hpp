@@ -11,7 +11,10 @@
 //    volumetrics with a depth-aware upsampling);
 //  - refined pixels (those of the other blocks: the light cone's edges, silhouettes, caustic structure
 //    narrower than a block) are evaluated in full, as the mean of `subpixels` x `subpixels` stratified
-//    rays through the pixel's square, each to its own first hit (the box filter at the cone's edges).
+//    rays through the pixel's square, each to its own first hit (the box filter at the cone's edges);
+//  - edge pixels (refined pixels whose sub-rays' radiances spread by more than `refine` of their mean:
+//    a hull's edge crosses them, where a ray's chord through the light grows as the square root of its
+//    distance from the cone's surface) are evaluated again with `edge_subpixels` x `edge_subpixels` rays.
 //
 // step = 1, subpixels = 1 is the paper's one ray per pixel centre. The defaults (step 2, refine 1, 2 x 2
 // sub-rays) were chosen on a sweep of sphere_fog (README): faster than the paper's and with a third less
@@ -34,6 +37,7 @@ struct VolumeSettings {
     int step = 2;          // node spacing [pixels]
     double refine = 1.0;   // a block whose nodes differ by more than this fraction of their mean is refined
     int subpixels = 2;     // rays per side of a refined pixel
+    int edge_subpixels = 1;   // rays per side of a refined pixel whose sub-rays disagree (a hull's edge in it)
 };
 
 struct VolumeStats {
@@ -41,6 +45,7 @@ struct VolumeStats {
     std::int64_t rays = 0;      // (beam, ray) integrals evaluated
     std::int64_t clamped = 0;   // integrand evaluations at a focus where |A| was clamped
     std::int64_t refined = 0;   // pixels evaluated in full (not interpolated)
+    std::int64_t edge_pixels = 0;   // refined pixels evaluated again with edge_subpixels^2 rays
 };
 
 // One beam as the volume view sees it: its integral from the camera and its pixels (hull_raster.hpp).

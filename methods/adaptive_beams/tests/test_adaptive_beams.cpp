@@ -386,14 +386,16 @@ TEST(AdaptiveBeams, BoxFilteredVolumeAgreesWithTheReferenceAtTheConesEdges) {
     const ReferenceResult ref = traced.run(8'000'000, 2, &gbuffer);
     const Rendered centre = render(scene, {{"volume_step", "1"}, {"volume_subpixels", "1"}}, 32);
     const Rendered box = render(scene, {{"volume_step", "1"}, {"volume_subpixels", "16"}, {"volume_refine", "0"}}, 32);
+    // The edge pass: 2 x 2 sub-rays, and 16 x 16 only where they disagree by more than a quarter of their mean.
+    const Rendered edge = render(scene, {{"volume_refine", "0.25"}, {"volume_edge_subpixels", "16"}}, 32);
     const Image& c = centre.out.camera_volume;
     const int W = c.width, H = c.height;
     float peak = 0.0f;
     for (const float v : c.pixels) peak = std::max(peak, v);
     ASSERT_GT(peak, 0.0f);
     constexpr double kT = 5.41;   // two-sided p = 0.001 for Student's t with 7 degrees of freedom
-    double t2_centre = 0.0, t2_box = 0.0;
-    int edges = 0, pass_centre = 0, pass_box = 0;
+    double t2_centre = 0.0, t2_box = 0.0, t2_edge = 0.0;
+    int edges = 0, pass_centre = 0, pass_box = 0, pass_edge = 0;
     for (int y = 0; y < H; ++y)
         for (int x = 0; x < W; ++x) {
             float lo = peak, hi = 0.0f;
@@ -408,17 +410,28 @@ TEST(AdaptiveBeams, BoxFilteredVolumeAgreesWithTheReferenceAtTheConesEdges) {
             ++edges;
             const double tc = (c.at(x, y) - ref.camera_volume.at(x, y)) / se;
             const double tb = (box.out.camera_volume.at(x, y) - ref.camera_volume.at(x, y)) / se;
+            const double te = (edge.out.camera_volume.at(x, y) - ref.camera_volume.at(x, y)) / se;
             t2_centre += tc * tc;
             t2_box += tb * tb;
+            t2_edge += te * te;
             pass_centre += std::abs(tc) <= kT;
             pass_box += std::abs(tb) <= kT;
+            pass_edge += std::abs(te) <= kT;
         }
-    std::printf("sphere_fog 64 x 48, %d edge pixels: mean t^2 centre %.1f, box %.2f; within |t| <= %.2f: centre %d, "
-                "box %d\n", edges, t2_centre / edges, t2_box / edges, kT, pass_centre, pass_box);
+    const long long rays_box = box.out.health.get("volume_rays"), rays_edge = edge.out.health.get("volume_rays");
+    std::printf("sphere_fog 64 x 48, %d edge pixels: mean t^2 centre %.1f, box %.2f, edge pass %.2f; within |t| <= %.2f: "
+                "centre %d, box %d, edge pass %d; integrals box %lld, edge pass %lld (%lld pixels)\n",
+                edges, t2_centre / edges, t2_box / edges, t2_edge / edges, kT, pass_centre, pass_box, pass_edge, rays_box,
+                rays_edge, static_cast<long long>(edge.out.health.get("volume_edge_pixels")));
     ASSERT_GT(edges, 20);
     EXPECT_LT(pass_centre, edges / 2);
     EXPECT_GE(pass_box, 0.9 * edges);
     EXPECT_LT(t2_box, 0.01 * t2_centre);
+    // The edge pass finds the pixels the cone's surface crosses: the same agreement for fewer integrals.
+    EXPECT_GT(edge.out.health.get("volume_edge_pixels"), 0);
+    EXPECT_GE(pass_edge, 0.9 * edges);
+    EXPECT_LT(t2_edge, 0.01 * t2_centre);
+    EXPECT_LT(rays_edge, rays_box);
 }
 
 // An image one pixel wide or tall has no blocks between nodes: every pixel is evaluated in full, with
