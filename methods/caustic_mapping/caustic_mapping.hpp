@@ -62,7 +62,7 @@ constexpr int kMinGrid = 64;
 // kFoldMinFocusFraction to kFoldMaxFocusFraction x the first focus under light at most kFoldMaxTiltDeg from
 // the vertical (the drawn cases' range). Just past the focus the cusp where the two folds meet lies near
 // the receiver and its peak bins are not held (up to 0.14 measured between 1.0 and 1.1 x).
-constexpr double kFoldClaimError = 0.10, kFoldMinFocusFraction = 1.1, kFoldMaxFocusFraction = 3.0,
+constexpr double kFoldClaimError = 0.10, kFoldMinFocusFraction = 1.1, kFoldMaxFocusFraction = 6.0,
                  kFoldMaxTiltDeg = 40.0;
 constexpr int kFoldMinGrid = 512, kFoldMinMap = 6144;
 // Caustic-map texels per grid spacing where the claims were measured: at 3 (grid 256, map 768) the map's

@@ -29,7 +29,7 @@ AccuracyClaim claim_for(const FrameGeometry& frame, const Settings& s) {
     if (!w.valid) return AccuracyClaim::within(kDefaultClaimError);
     // Two regimes. Before 0.9 x the first focus, nrmse 0.05 from grid 64. Past it, the folds of the ray map
     // need the surface sampled finely and the map's texels well inside a bin (README.md "Past the first
-    // focus"): settings that do both are held to 0.10 from 1.1 to 3 x the focus; other settings stay at 0.9.
+    // focus"): settings that do both are held to 0.10 from 1.1 to 6 x the focus; other settings stay at 0.9.
     const bool fold_settings = s.grid >= kFoldMinGrid && s.map >= kFoldMinMap && s.elliptic && s.bilinear &&
                                s.estimator.kind == EstimatorKind::Newton;
     const bool folds = fold_settings && w.depth_over_first_focus() > kMaxFocusFraction;
@@ -71,7 +71,7 @@ AccuracyClaim claim_for(const FrameGeometry& frame, const Settings& s) {
                 return why + format(", beyond the %.1f x where the regime past the focus was measured", kFoldMaxFocusFraction);
             return why + format(", beyond %.2f: past the focus the folds need a finer surface sampling and caustic map "
                                 "(the defaults, grid 128 and map 768, scored up to 0.35 on drawn cases there; grid >= 512 "
-                                "with map >= 6144 is claimed to 0.10 from 1.1 to 3 x the focus)",
+                                "with map >= 6144 is claimed to 0.10 from 1.1 to 6 x the focus)",
                                 kMaxFocusFraction);
         }
         if (b.quantity == "grid") return format("grid %.0f below the %.0f where the claim was measured", b.value, b.limit);

@@ -183,8 +183,8 @@ TEST(CausticMappingHard, PastTheFocusFoldsAreSummed) {
 }
 
 // The regime past the first focus: grid 512 with a caustic map of 6144 samples the folds finely enough to
-// be held to 0.10 (measured from 1.1 to 3 x the focus on 400 drawn cases); the defaults, a coarser map, light
-// beyond 40 deg, the cusp just past the focus or a floor past 3 x keep the case outside, each naming its bound.
+// be held to 0.10 (measured from 1.1 to 6 x the focus on 600 drawn cases); the defaults, a coarser map, light
+// beyond 40 deg, the cusp just past the focus or a floor past 6 x keep the case outside, each naming its bound.
 TEST(CausticMappingHard, PastTheFocusClaimedAtTheFoldSettings) {
     const std::map<std::string, std::string> fold = {{"grid", "512"}, {"map", "6144"}};
     const SineSetup deep = sine(20.0, -1.2, 0.2);
@@ -213,12 +213,12 @@ TEST(CausticMappingHard, PastTheFocusClaimedAtTheFoldSettings) {
     const AccuracyClaim sc = claim_for(steep, fine);
     EXPECT_FALSE(sc.inside);
     EXPECT_NE(sc.reason.find("42.0 deg"), std::string::npos) << sc.reason;
-    // sine's focus is 0.64 m down: a floor at 2.2 m is 3.4 x the way.
-    const Scene far_scene = test_support::make_sine_scene(sine(0.0, -2.2, 0.2));
+    // sine's focus is 0.64 m down: a floor at 4.2 m is 6.6 x the way.
+    const Scene far_scene = test_support::make_sine_scene(sine(0.0, -4.2, 0.2));
     const FrameGeometry far = build_frame_geometry(far_scene, 0);
     const AccuracyClaim fc = claim_for(far, fine);
     EXPECT_FALSE(fc.inside);
-    EXPECT_NE(fc.reason.find("beyond the 3.0 x"), std::string::npos) << fc.reason;
+    EXPECT_NE(fc.reason.find("beyond the 6.0 x"), std::string::npos) << fc.reason;
     // Just past the focus (0.67 m: 1.05 x) the cusp lies near the receiver: outside, by the lower bound.
     const Scene cusp_scene = test_support::make_sine_scene(sine(0.0, -0.67, 0.2));
     const FrameGeometry cusp = build_frame_geometry(cusp_scene, 0);
