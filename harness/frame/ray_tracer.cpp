@@ -59,7 +59,8 @@ void on_embree_error(void* /*user*/, RTCError code, const char* message) {
 // One process-wide device: creating a device spins up Embree's thread pool and is expensive.
 // CAUSTICS_EMBREE_CONFIG, when set, is passed to rtcNewDevice as its configuration string (Embree 3's
 // "isa=avx2", "threads=N", "verbose=1", ...): with "isa=avx2" a CPU with AVX-512 runs the AVX2 kernels,
-// whose sums a machine without AVX-512 gives (tests/test_reference_bits.cpp checks both sets of hashes).
+// as a machine without AVX-512 would (its sums' last bits need not be that machine's on every CPU:
+// tests/test_reference_bits.cpp).
 RTCDevice shared_device() {
     static RTCDevice device = [] {
         const char* config = std::getenv("CAUSTICS_EMBREE_CONFIG");
