@@ -190,7 +190,7 @@ MethodInfo method_info() {
         {"volume_edge_subpixels", ParamType::Int, "1", 1, 16, {},
          "camera_volume: rays per side of a refined pixel whose sub-rays' radiances spread by more than "
          "volume_refine of their mean (a hull's edge crosses it: the light cone's surface); at most "
-         "volume_subpixels: no second pass"},
+         "volume_subpixels, or volume_subpixels 1 (one ray: no spread to test): no second pass"},
         {"receiver_samples", ParamType::Int, "3", 1, 8, {},
          "point-in-beam samples per side of each receiver bin (their mean is the bin's mean irradiance)"},
         {"camera_surface", ParamType::Enum, "coverage", 0, 0, {"coverage", "point"},

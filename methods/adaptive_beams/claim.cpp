@@ -21,6 +21,10 @@ namespace {
 constexpr double kClaimError = 0.10;
 constexpr double kFineDeviation = 0.01, kCoarseDeviation = 0.05;
 constexpr double kMinFinestGrid = 128, kFoldFinestGrid = 256, kDeepFoldFinestGrid = 512;
+// The deep-fold regime was measured from the default initial grid (16) refined 5 levels: a coarser start
+// could let the oracle miss what the first level does not resolve, and without a refinement level
+// fold_split has nothing to send down.
+constexpr int kDeepFoldMinGrid = 16;
 constexpr double kFocusFine = 0.8, kFocusFolds = 1.2, kFocusDeepFolds = 6.0, kFocusCoarse = 0.4;
 }  // namespace
 
@@ -46,7 +50,9 @@ AccuracyClaim claim_for(const FrameGeometry& frame, const GridSettings& s) {
     // A uniform grid (adaptive off) has every cell at the finest level: the deviation test is moot.
     const double deviation = s.adaptive ? s.deviation : 0.0;
     const double focus_limit = deviation > kFineDeviation                          ? kFocusCoarse
-                               : finest >= kDeepFoldFinestGrid && s.adaptive && s.fold_split ? kFocusDeepFolds
+                               : finest >= kDeepFoldFinestGrid && s.adaptive && s.fold_split && s.iterations >= 1 &&
+                                         s.grid >= kDeepFoldMinGrid
+                                     ? kFocusDeepFolds
                                : finest >= kFoldFinestGrid && (s.fold_split || !s.adaptive) ? kFocusFolds
                                                                                            : kFocusFine;
     std::vector<RegimeBound> bounds = {{"finest_grid", static_cast<double>(finest), kMinFinestGrid, false},
@@ -69,9 +75,10 @@ AccuracyClaim claim_for(const FrameGeometry& frame, const GridSettings& s) {
                                   ? " (a deviation of at most 0.01 claims up to 0.8 of the way)"
                                   : focus_limit == kFocusFine
                                         ? " (1.2 x needs a finest grid of 256 with fold_split, or a uniform grid of 256; "
-                                          "6 x a finest adaptive grid of 512 with fold_split)"
+                                          "6 x a finest adaptive grid of 512 from a grid of at least 16, with fold_split)"
                                   : focus_limit == kFocusFolds
-                                        ? " (6 x needs a finest adaptive grid of 512 with fold_split)"
+                                        ? " (6 x needs a finest adaptive grid of 512 from a grid of at least 16, with "
+                                          "fold_split)"
                                         : "";
         char why[512];
         std::snprintf(why, sizeof why,

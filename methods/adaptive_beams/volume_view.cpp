@@ -105,8 +105,9 @@ std::vector<int> lattice(int n, int step) {
 // The pixels `want` as the mean of sub x sub stratified rays through their squares, each ray to its own
 // first hit (without a tracer: to its pixel's depth), added to out[pixel]. The rays are made, traced and
 // integrated in bands of rows of at most kChunkRays rays (at least one row: 16 x 16 sub-rays of a
-// 4,096-pixel row are 32 MB), so that memory stays bounded. With `edge` set, a pixel whose rays' radiances
-// spread by more than `refine` of their mean is marked in it.
+// 4,096-pixel row are 32 MB), so that memory stays bounded. With `edge` set and sub > 1, a pixel whose rays'
+// radiances spread by more than `refine` of their mean is marked in it (out must start at zero: out[pixel]
+// is then the rays' mean).
 template <class Want>
 void box_pass(const Want& want, int sub, const std::vector<VolumeBeam>& beams, const CameraModel& cam,
               const CameraGBuffer& g, const RayTracer* tracer, int samples, std::vector<double>& out,

@@ -30,21 +30,18 @@ AccuracyClaim claim_for(const FrameGeometry& frame, const Settings& s) {
     // Two regimes. Before 0.9 x the first focus, nrmse 0.05 from grid 64. Past it, the folds of the ray map
     // need the surface sampled finely and the map's texels well inside a bin (README.md "Past the first
     // focus"): settings that do both are held to 0.10 from 1.1 to 6 x the focus; other settings stay at 0.9.
-    const bool fold_settings = s.grid >= kFoldMinGrid && s.map >= kFoldMinMap && s.elliptic && s.bilinear &&
-                               s.estimator.kind == EstimatorKind::Newton;
+    const double map_per_grid = static_cast<double>(s.map) / std::max(1, s.grid);
+    const bool fold_settings = s.grid >= kFoldMinGrid && std::abs(map_per_grid - kFoldMapPerGrid) < 1e-9 &&
+                               s.elliptic && s.bilinear && s.estimator.kind == EstimatorKind::Newton;
     const bool folds = fold_settings && w.depth_over_first_focus() > kMaxFocusFraction;
     const double focus_limit = folds ? kFoldMaxFocusFraction : kMaxFocusFraction;
     const double tilt_limit = folds ? kFoldMaxTiltDeg : kMaxTiltDeg;
     std::vector<RegimeBound> bounds = {{"tilt_deg", w.tilt_deg, tilt_limit, true},
                                        {"depth_over_first_focus", w.depth_over_first_focus(), focus_limit, true},
                                        {"grid", static_cast<double>(s.grid), static_cast<double>(folds ? kFoldMinGrid : kMinGrid), false}};
-    const double map_per_grid = static_cast<double>(s.map) / std::max(1, s.grid);
-    bounds.push_back({"map_per_grid", map_per_grid, kMinMapPerGrid, false});
-    bounds.push_back({"map_per_grid", map_per_grid, kMaxMapPerGrid, true});
-    if (folds) {
-        bounds.push_back({"depth_over_first_focus", w.depth_over_first_focus(), kFoldMinFocusFraction, false});
-        bounds.push_back({"map", static_cast<double>(s.map), static_cast<double>(kFoldMinMap), false});
-    }
+    bounds.push_back({"map_per_grid", map_per_grid, folds ? kFoldMapPerGrid : kMinMapPerGrid, false});
+    bounds.push_back({"map_per_grid", map_per_grid, folds ? kFoldMapPerGrid : kMaxMapPerGrid, true});
+    if (folds) bounds.push_back({"depth_over_first_focus", w.depth_over_first_focus(), kFoldMinFocusFraction, false});
     // The paper's approximate iteration d <- |lookup(v + d r) - v| converges in a few steps only where
     // the refracted rays are near-vertical; one step under tilted light left the caustic at the wrong
     // depth (quick sweep, sine_oblique: 1.4 x the baseline's error at grids 64 and 128; 3 steps: 0.07).
@@ -71,17 +68,17 @@ AccuracyClaim claim_for(const FrameGeometry& frame, const Settings& s) {
                 return why + format(", beyond the %.1f x where the regime past the focus was measured", kFoldMaxFocusFraction);
             return why + format(", beyond %.2f: past the focus the folds need a finer surface sampling and caustic map "
                                 "(the defaults, grid 128 and map 768, scored up to 0.35 on drawn cases there; grid >= 512 "
-                                "with map >= 6144 is claimed to 0.10 from 1.1 to 6 x the focus)",
+                                "with a map of 12 x grid, the elliptic splats, bilinear lookups and Newton's estimator "
+                                "is claimed to 0.10 from 1.1 to 6 x the focus)",
                                 kMaxFocusFraction);
         }
         if (b.quantity == "grid") return format("grid %.0f below the %.0f where the claim was measured", b.value, b.limit);
         if (b.quantity == "map_per_grid")
             return format("caustic map %.0f at grid %.0f: %.3g texels per grid spacing, ", s.map, s.grid, b.value) +
                    format(b.upper ? "above the %.0f where the claim was measured (48 scored 0.26 before the focus)"
-                                  : "below the %.0f where the claim was measured (3 left sharp lines to the map's texels)",
+                                  : "below the %.0f where the claim was measured (3 left sharp lines to the map's texels; "
+                                    "the automatic map stops at 4096: set map)",
                           b.limit);
-        if (b.quantity == "map")
-            return format("caustic map %.0f below the %.0f texels the regime past the first focus needs", b.value, b.limit);
         return format("the approximate estimator with %.0f iteration(s) under light %.1f deg from the vertical: it is "
                       "claimed from %.0f iterations (one left sine_oblique at 1.4 x the flat baseline's error)",
                       b.value, w.tilt_deg, b.limit);
