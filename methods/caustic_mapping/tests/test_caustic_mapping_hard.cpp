@@ -196,54 +196,39 @@ TEST(CausticMappingHard, PastTheFocusClaimedAtTheFoldSettings) {
     ASSERT_TRUE(r.claim.inside) << r.claim.reason;
     EXPECT_DOUBLE_EQ(r.claim.max_error, kFoldClaimError);
     EXPECT_LT(r.nrmse, r.claim.bound(r.baseline));
-    // A frame points at its scene: each scene outlives its frame.
-    const Scene deep_scene = test_support::make_sine_scene(deep);
-    const FrameGeometry frame = build_frame_geometry(deep_scene, 0);
-    const AccuracyClaim defaults = claim_for(frame, Settings{});
-    EXPECT_FALSE(defaults.inside);
-    EXPECT_NE(defaults.reason.find("grid >= 512"), std::string::npos) << defaults.reason;
-    Settings coarse_map;
-    coarse_map.grid = kFoldMinGrid;
-    coarse_map.map = 3072;
-    const AccuracyClaim cm = claim_for(frame, coarse_map);
-    EXPECT_FALSE(cm.inside);
-    EXPECT_NE(cm.reason.find("map of 12 x grid"), std::string::npos) << cm.reason;
-    Settings fine = coarse_map;
+    // The claim of one setting on one case (a frame points at its scene: the scene lives while it is taken),
+    // and a refusal that names its bound.
+    auto claim_at = [](const SineSetup& c, const Settings& s) {
+        const Scene scene = test_support::make_sine_scene(c);
+        return claim_for(build_frame_geometry(scene, 0), s);
+    };
+    auto expect_refused = [&](const SineSetup& c, const Settings& s, const char* why) {
+        const AccuracyClaim a = claim_at(c, s);
+        EXPECT_FALSE(a.inside) << why;
+        EXPECT_NE(a.reason.find(why), std::string::npos) << a.reason;
+    };
+    expect_refused(deep, Settings{}, "grid >= 512");
+    Settings fine;
+    fine.grid = kFoldMinGrid;
+    fine.map = 3072;
+    expect_refused(deep, fine, "map of 12 x grid");
     fine.map = 6144;
-    EXPECT_TRUE(claim_for(frame, fine).inside);
+    EXPECT_TRUE(claim_at(deep, fine).inside);
     // The gates: the regime was measured with the elliptic splats, bilinear lookups and Newton's estimator.
     Settings gaussian = fine, nearest = fine, approx = fine;
     gaussian.elliptic = false;
     nearest.bilinear = false;
     approx.estimator.kind = EstimatorKind::Approx;
-    for (const Settings& gate : {gaussian, nearest, approx}) {
-        const AccuracyClaim g = claim_for(frame, gate);
-        EXPECT_FALSE(g.inside);
-        EXPECT_NE(g.reason.find("elliptic splats"), std::string::npos) << g.reason;
-    }
+    for (const Settings& gate : {gaussian, nearest, approx}) expect_refused(deep, gate, "elliptic splats");
     // Before the focus (0.25 m: 0.4 x) the fold settings are held to the first regime's 0.05.
-    const Scene shallow_scene = test_support::make_sine_scene(sine(0.0, -0.25, 0.2));
-    const FrameGeometry shallow = build_frame_geometry(shallow_scene, 0);
-    const AccuracyClaim sh = claim_for(shallow, fine);
+    const AccuracyClaim sh = claim_at(sine(0.0, -0.25, 0.2), fine);
     ASSERT_TRUE(sh.inside) << sh.reason;
     EXPECT_DOUBLE_EQ(sh.max_error, kClaimError);
-    const Scene steep_scene = test_support::make_sine_scene(sine(42.0, -1.2, 0.2));
-    const FrameGeometry steep = build_frame_geometry(steep_scene, 0);
-    const AccuracyClaim sc = claim_for(steep, fine);
-    EXPECT_FALSE(sc.inside);
-    EXPECT_NE(sc.reason.find("42.0 deg"), std::string::npos) << sc.reason;
+    expect_refused(sine(42.0, -1.2, 0.2), fine, "42.0 deg");
     // sine's focus is 0.64 m down: a floor at 4.2 m is 6.6 x the way.
-    const Scene far_scene = test_support::make_sine_scene(sine(0.0, -4.2, 0.2));
-    const FrameGeometry far = build_frame_geometry(far_scene, 0);
-    const AccuracyClaim fc = claim_for(far, fine);
-    EXPECT_FALSE(fc.inside);
-    EXPECT_NE(fc.reason.find("beyond the 6.0 x"), std::string::npos) << fc.reason;
+    expect_refused(sine(0.0, -4.2, 0.2), fine, "beyond the 6.0 x");
     // Just past the focus (0.67 m: 1.05 x) the cusp lies near the receiver: outside, by the lower bound.
-    const Scene cusp_scene = test_support::make_sine_scene(sine(0.0, -0.67, 0.2));
-    const FrameGeometry cusp = build_frame_geometry(cusp_scene, 0);
-    const AccuracyClaim cc = claim_for(cusp, fine);
-    EXPECT_FALSE(cc.inside);
-    EXPECT_NE(cc.reason.find("cusp"), std::string::npos) << cc.reason;
+    expect_refused(sine(0.0, -0.67, 0.2), fine, "cusp");
 }
 
 // The claim's bound: sine at normal incidence and at 30 deg over a floor 0.25 m down (0.40 and 0.57 of the
