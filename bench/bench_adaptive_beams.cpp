@@ -102,6 +102,12 @@ void BM_OracleAndSurface(benchmark::State& state) {
     run(state, params);
 }
 
+// The volume view on a beam set of its own with fewer levels, before and after in one run (third argument:
+// volume_iterations; -1 the surfaces' beams, the former default).
+void BM_VolumeBeams(benchmark::State& state) {
+    run(state, {{"volume_iterations", std::to_string(state.range(2))}});
+}
+
 void BM_HeapPolicy(benchmark::State& state) {
 #if defined(__GLIBC__)
     if (state.range(2) == 0) {
@@ -116,6 +122,7 @@ void BM_HeapPolicy(benchmark::State& state) {
 
 }  // namespace
 
+BENCHMARK(BM_VolumeBeams)->ArgsProduct({{0, 1}, {2}, {-1, 2, 1}})->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true)->UseRealTime();
 BENCHMARK(BM_HeapPolicy)->ArgsProduct({{0, 1}, {2}, {0, 1}})->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true)->UseRealTime();
 BENCHMARK(BM_OracleAndSurface)->ArgsProduct({{0, 1}, {2}, {0, 1, 2}})->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true)->UseRealTime();
 BENCHMARK(BM_Adaptive)->ArgsProduct({{0, 1}, {1, 2}})->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true)->UseRealTime();

@@ -378,6 +378,25 @@ TEST(AdaptiveBeams, RendersSphereFogAndPoolMurky) {
     }
 }
 
+// The volume view on a coarser beam set of its own (volume_iterations, default 2 of the 3 levels): the
+// surfaces keep their beams bit for bit, the volume integrates fewer, and asking for as many levels as the
+// surfaces have gives the shared set's image exactly. (Its error against the reference: the test below,
+// at the defaults; README "Fewer beams for the volume".)
+TEST(AdaptiveBeams, VolumeViewOnItsOwnCoarserBeams) {
+    const Scene scene = small_view("sphere_fog", 32);
+    const Rendered shared = render(scene, {{"volume_iterations", "-1"}}, 32);
+    const Rendered coarse = render(scene, {}, 32);
+    const Rendered same = render(scene, {{"volume_iterations", "3"}}, 32);
+    EXPECT_EQ(shared.out.camera.pixels, coarse.out.camera.pixels);
+    EXPECT_EQ(shared.out.receiver.pixels, coarse.out.receiver.pixels);
+    EXPECT_EQ(shared.out.health.get("volume_beams"), shared.out.health.get("beams_generated"));
+    EXPECT_LT(coarse.out.health.get("volume_beams"), coarse.out.health.get("beams_generated") / 2);
+    EXPECT_LT(coarse.out.health.get("volume_rays"), shared.out.health.get("volume_rays"));
+    EXPECT_NE(shared.out.camera_volume.pixels, coarse.out.camera_volume.pixels);
+    EXPECT_EQ(shared.out.camera_volume.pixels, same.out.camera_volume.pixels);
+    EXPECT_TRUE(all_finite(coarse.out.camera_volume));
+}
+
 // Against the reference's camera_volume (single scattering towards the pinhole) on the two volume scenes
 // at 64 x 48 pixels (2e6 photons): the net error (run/net_error.hpp: the mean squared difference less the
 // reference's own variance) is below the best constant's (the mean of the reference: the no-caustic
