@@ -349,4 +349,9 @@ TEST_F(CliTest, CompareRefusesANonSweepAndFindsASweepEqualToItself) {
     r = run({"compare", sweep.string(), sweep.string(), "--alpha", "2"});
     EXPECT_EQ(r.code, 2) << r.err;
     EXPECT_NE(r.err.find("--alpha"), std::string::npos) << r.err;
+    // --out is checked as every command's output folder is, before any work.
+    r = run({"compare", sweep.string(), sweep.string(), "--out", "/proc/caustics_compare"});
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_NE(r.err.find("--out"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("virtual file system"), std::string::npos) << r.err;
 }

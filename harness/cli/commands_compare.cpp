@@ -18,7 +18,7 @@ Command make_compare_command() {
         auto o = std::make_shared<CompareOptions>();
         app.add_option("base", o->base, "The base sweep folder (results.jsonl)")->required();
         app.add_option("new", o->new_dir, "The new sweep folder")->required();
-        app.add_option("--out", o->out, "Output folder (default NEW/compare): compare.md, compare.csv, a figure");
+        add_output_folder_option(app, "--out", o->out, "Output folder (default NEW/compare): compare.md, compare.csv, a figure");
         add_number_option(app, "--alpha", o->alpha, 1e-9, 0.5, "Significance level of the time test (default 0.01)");
         add_number_option(app, "--time-threshold", o->time_threshold, 0.0, 10.0,
                           "Smallest time change reported, as a fraction (default 0.05)");
