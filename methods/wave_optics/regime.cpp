@@ -97,7 +97,7 @@ double sampling_margin(double lambda, double spacing, double deviation) {
 }
 
 Regime estimate_regime(const SurfaceStats& stats, const glm::dvec3& light, double ior, double lambda, double depth,
-                       double period) {
+                       double period, double exact_focus) {
     const double inf = std::numeric_limits<double>::infinity();
     const double cos_i = -glm::normalize(light).z;
     const double sin_t = std::sqrt(std::max(0.0, 1.0 - cos_i * cos_i)) / ior;
@@ -105,7 +105,7 @@ Regime estimate_regime(const SurfaceStats& stats, const glm::dvec3& light, doubl
     const double c = ior * cos_t - cos_i;
     Regime r;
     r.depth = depth;
-    r.focus_depth = stats.e_min < 0.0 ? -1.0 / stats.e_min : inf;
+    r.focus_depth = std::min(stats.e_min < 0.0 ? -1.0 / stats.e_min : inf, exact_focus > 0.0 ? exact_focus : inf);
     r.length_scale = stats.curvature > 0.0 ? 2.0 * std::numbers::pi * stats.slope / stats.curvature : inf;
     r.rho = std::isfinite(r.focus_depth) ? depth / r.focus_depth : 0.0;
     const double z_eff = depth / (cos_t * cos_t * cos_t);

@@ -14,11 +14,11 @@ namespace caustics::wave_optics {
 
 namespace {
 
-// Raised-cosine window: 0 at the border, 1 beyond `band` inside, for u in [0, L).
-double taper_window(double u, double length, double band) {
-    const double d = std::min(u, length - u);
-    if (d >= band) return 1.0;
-    return 0.5 - 0.5 * std::cos(std::numbers::pi * std::max(d, 0.0) / band);
+// Raised-cosine weight of the border at distance d outside the surface: 1 at its edge, 0 at d = pad.
+double border_weight(double d, double pad) {
+    if (d <= 0.0) return 1.0;
+    if (d >= pad) return 0.0;
+    return 0.5 + 0.5 * std::cos(std::numbers::pi * d / pad);
 }
 
 // Periodic index into [0, n).
@@ -74,38 +74,54 @@ EdgeCheck check_edges(const HeightField& hf) {
     return {hf.periodic || mismatch <= tolerance, edge_sum / std::max<std::size_t>(edge_count, 1)};
 }
 
-const SurfaceSamples& WaveFieldTable::resample(const HeightField& hf, double lx, double ly, ResamplePath path) {
-    const EdgeCheck edges = check_edges(hf);
-    surface_.periodic = edges.periodic;
-    const double edge_mean = edges.edge_mean;
-    const double band_x = lx / 16.0, band_y = ly / 16.0;
-    surface_.taper_band = surface_.periodic ? 0.0 : taper_band_width(lx, ly);
+FftWindow fft_window(const EdgeCheck& edges, double lx, double ly) {
+    FftWindow w;
+    w.periodic = edges.periodic;
+    w.edge_mean = edges.edge_mean;
+    w.pad = edges.periodic ? 0.0 : border_pad_width(lx, ly);
+    w.lx = lx + 2.0 * w.pad;
+    w.ly = ly + 2.0 * w.pad;
+    return w;
+}
 
-    // Bilinear weights per grid column / row: grid sample i sits at vertex coordinate i (nx-1) / N.
+const SurfaceSamples& WaveFieldTable::resample(const HeightField& hf, const FftWindow& window, double lx, double ly,
+                                               ResamplePath path) {
+    surface_.window = window;
+    const double edge_mean = window.edge_mean;
+    const double pad = window.pad;
+
+    // Per grid column / row: the surface vertex to the left (bilinear weight), or for a border sample the
+    // edge vertex it copies and the border's weight. Grid sample i sits at window coordinate i lx' / N, the
+    // surface's coordinate that less the border.
     std::vector<int> i0(static_cast<std::size_t>(nx_)), j0(static_cast<std::size_t>(ny_));
     std::vector<float> fx(static_cast<std::size_t>(nx_)), fy(static_cast<std::size_t>(ny_));
     std::vector<float> wx(static_cast<std::size_t>(nx_), 1.0f), wy(static_cast<std::size_t>(ny_), 1.0f);
+    auto axis = [pad](int i, int n, double window_l, double surface_l, int vertices, int& v0, float& f, float& w) {
+        double g = static_cast<double>(i) * (vertices - 1) / n;   // no border: the surface is the window
+        w = 1.0f;
+        if (pad > 0.0) {
+            const double s = static_cast<double>(i) * window_l / n - pad;
+            w = static_cast<float>(border_weight(std::max(-s, s - surface_l), pad));
+            g = std::clamp(s / surface_l, 0.0, 1.0) * (vertices - 1);
+        }
+        v0 = std::min(static_cast<int>(g), std::max(vertices - 2, 0));
+        f = static_cast<float>(g - v0);
+    };
     for (int i = 0; i < nx_; ++i) {
-        const double g = static_cast<double>(i) * (hf.nx - 1) / nx_;
-        const int a = std::min(static_cast<int>(g), std::max(hf.nx - 2, 0));
-        i0[static_cast<std::size_t>(i)] = a;
-        fx[static_cast<std::size_t>(i)] = static_cast<float>(g - a);
-        if (!surface_.periodic) wx[static_cast<std::size_t>(i)] = static_cast<float>(taper_window(i * lx / nx_, lx, band_x));
+        const std::size_t k = static_cast<std::size_t>(i);
+        axis(i, nx_, window.lx, lx, hf.nx, i0[k], fx[k], wx[k]);
     }
     for (int j = 0; j < ny_; ++j) {
-        const double g = static_cast<double>(j) * (hf.ny - 1) / ny_;
-        const int a = std::min(static_cast<int>(g), std::max(hf.ny - 2, 0));
-        j0[static_cast<std::size_t>(j)] = a;
-        fy[static_cast<std::size_t>(j)] = static_cast<float>(g - a);
-        if (!surface_.periodic) wy[static_cast<std::size_t>(j)] = static_cast<float>(taper_window(j * ly / ny_, ly, band_y));
+        const std::size_t k = static_cast<std::size_t>(j);
+        axis(j, ny_, window.ly, ly, hf.ny, j0[k], fy[k], wy[k]);
     }
     const int step_x = hf.nx > 1 ? 1 : 0;
     const int step_y = hf.ny > 1 ? 1 : 0;
     const float e = static_cast<float>(edge_mean);
-    const bool taper = !surface_.periodic;
+    const bool taper = pad > 0.0;
     // On-vertex samples: g = i (vertices - 1) / N is an integer, so f = 0 and the blend returns the
     // vertex exactly (x + 0 * y = x for finite heights).
-    const bool on_vertices = path == ResamplePath::Auto && hf.nx > 1 && hf.ny > 1 &&
+    const bool on_vertices = path == ResamplePath::Auto && !taper && hf.nx > 1 && hf.ny > 1 &&
                              (hf.nx - 1) % nx_ == 0 && (hf.ny - 1) % ny_ == 0;
     const int vertex_step_x = on_vertices ? (hf.nx - 1) / nx_ : 0;
     std::vector<double> row_sum(static_cast<std::size_t>(ny_), 0.0);
@@ -228,6 +244,7 @@ void WaveFieldTable::lookup(const LookupGeometry& geo, const std::vector<ShadePo
     const glm::dvec2 beam_walk(geo.refracted.x / cos_t, geo.refracted.y / cos_t);
     const double z0 = slices > 0 ? geo.depths.front() : 0.0;
     const double z1 = slices > 0 ? geo.depths.back() : 0.0;
+    const double sx = geo.lx - 2.0 * geo.pad, sy = geo.ly - 2.0 * geo.pad;   // the surface's size
     std::vector<std::int64_t> not_covered(points.size(), 0), tapered(points.size(), 0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 1024),
                       [&](const tbb::blocked_range<std::size_t>& r) {
@@ -242,13 +259,12 @@ void WaveFieldTable::lookup(const LookupGeometry& geo, const std::vector<ShadePo
             // Where the light reaching p crossed the mean surface (geometric beam), and where the
             // propagator's shifted frame holds p's intensity.
             const glm::dvec2 entry = glm::dvec2(p.position) - z * beam_walk;
-            const glm::dvec2 rel = entry - geo.origin;
-            if (rel.x < 0.0 || rel.y < 0.0 || rel.x > geo.lx || rel.y > geo.ly) {
+            const glm::dvec2 rel = entry - geo.origin - glm::dvec2(geo.pad);   // from the surface's corner
+            if (rel.x < 0.0 || rel.y < 0.0 || rel.x > sx || rel.y > sy) {
                 not_covered[k] = 1;
                 continue;
             }
-            if (geo.taper_band > 0.0 &&
-                std::min({rel.x, rel.y, geo.lx - rel.x, geo.ly - rel.y}) < geo.taper_band)
+            if (geo.pad > 0.0 && std::min({rel.x, rel.y, sx - rel.x, sy - rel.y}) < z * geo.reach_per_m)
                 tapered[k] = 1;
             const glm::dvec2 table = glm::dvec2(p.position) - z * geo.walk - geo.origin;
             const double gx = table.x / dx, gy = table.y / dy;

@@ -15,11 +15,22 @@
 
 namespace caustics::wave_optics {
 
+// The FFT window: one period of the field the propagator sees. A surface that tiles is its own window. A
+// surface whose edges do not match gets a border of `pad` on every side, outside the surface, in which the
+// heights fall to the edge mean over a raised cosine: the window then tiles, and the surface keeps its own
+// slopes out to its edges (only the border's light is not the scene's; the claim keeps it off the receiver).
+struct FftWindow {
+    double lx = 1.0, ly = 1.0;     // window size, the period of the FFT [m]
+    double pad = 0.0;              // border added on each side of the surface [m] (0 when it tiles)
+    bool periodic = true;          // the surface tiles
+    double edge_mean = 0.0;        // what the border falls to
+    double spacing(int grid) const { return std::max(lx, ly) / grid; }
+};
+
 struct SurfaceSamples {
-    std::vector<float> height;   // grid x grid heights above the mean level [m]
+    std::vector<float> height;   // grid x grid heights above the mean level [m], over the window
     double level = 0.0;          // world z of the mean level (the phase screen's reference plane)
-    bool periodic = true;        // false: the edges did not match and the border band was tapered
-    double taper_band = 0.0;     // width of the tapered border band [m] (non-periodic surfaces)
+    FftWindow window;
 };
 
 struct ShadePoint {
@@ -34,14 +45,15 @@ struct LookupGeometry {
     std::vector<double> depths;    // slice depths, ascending, evenly spaced
     glm::dvec2 walk{0.0};          // lateral walk per depth removed by the propagator
     glm::dvec3 refracted{0, 0, -1};  // refracted beam direction (mean index)
-    double taper_band = 0.0;
+    double pad = 0.0;              // the window's border: the surface spans [pad, l - pad] on each axis
+    double reach_per_m = 0.0;      // how far sideways the border's light may reach, per metre of depth
     double irradiance = 1.0;       // transmitted irradiance on a horizontal plane, E0 cos(theta_i) T
     double absorption = 0.0;       // Beer-Lambert Ka [1/m] of the water
 };
 
 struct LookupCounters {
     std::int64_t not_covered = 0;  // above the water, or lit through a point outside the surface
-    std::int64_t tapered = 0;      // lit through the tapered border band
+    std::int64_t tapered = 0;      // lit within the reach of the border's light (non-tiling surfaces)
 };
 
 // Whether the surface tiles (flagged periodic, or opposite edges equal to 1e-3 of the height range), and
@@ -52,22 +64,28 @@ struct EdgeCheck {
 };
 EdgeCheck check_edges(const HeightField& hf);
 
-// Width of the raised-cosine border band of a non-periodic surface: 1/16 of the shorter side.
-inline double taper_band_width(double lx, double ly) { return std::min(lx, ly) / 16.0; }
+// Width of the raised-cosine border around a non-periodic surface: 1/16 of its shorter side.
+inline double border_pad_width(double lx, double ly) { return std::min(lx, ly) / 16.0; }
+// The window for a surface of size lx x ly (fft_window: the edge check, then the border when needed).
+FftWindow fft_window(const EdgeCheck& edges, double lx, double ly);
+inline FftWindow fft_window(const HeightField& hf, double lx, double ly) { return fft_window(check_edges(hf), lx, ly); }
 
 class WaveFieldTable {
 public:
     WaveFieldTable(int nx, int ny, bool rgb);
 
-    // Resamples `hf` (bilinear) to the grid over its rectangle lx x ly. Surfaces flagged periodic, or
-    // whose opposite edges match to 1e-3 of their height range, are used as they are; others are
-    // tapered to their edge mean over a raised-cosine border band of 1/16 of the period.
-    // Where every grid sample falls on a vertex ((vertices - 1) a multiple of the grid along both axes,
-    // e.g. a 1024-cell surface on grid 1024 or 512), the bilinear weights are exactly 0 and the samples
-    // are copied (ResamplePath::Auto); the result is bit-identical to the bilinear path.
+    // Resamples `hf` (bilinear; its rectangle lx x ly) to the grid over `window`. Surfaces flagged
+    // periodic, or whose opposite edges match to 1e-3 of their height range, are their own window; others
+    // sit in the middle of a larger window whose border falls to their edge mean (FftWindow).
+    // Where every grid sample falls on a vertex (no border, and (vertices - 1) a multiple of the grid along
+    // both axes, e.g. a 1024-cell surface on grid 1024 or 512), the bilinear weights are exactly 0 and the
+    // samples are copied (ResamplePath::Auto); the result is bit-identical to the bilinear path.
     enum class ResamplePath { Auto, Bilinear };
-    const SurfaceSamples& resample(const HeightField& hf, double lx, double ly,
+    const SurfaceSamples& resample(const HeightField& hf, const FftWindow& window, double lx, double ly,
                                    ResamplePath path = ResamplePath::Auto);
+    const SurfaceSamples& resample(const HeightField& hf, double lx, double ly, ResamplePath path = ResamplePath::Auto) {
+        return resample(hf, fft_window(hf, lx, ly), lx, ly, path);
+    }
 
     // Sizes the table for `slices` depths (contents undefined until the first sample assigns them).
     void begin(int slices);

@@ -66,11 +66,13 @@ public:
         if (!find_setup(scene, why)) throw InputError(scene.path, "objects", "wave_optics: " + why);
         const Object& water = scene.objects[static_cast<std::size_t>(water_index_)];
         const HeightFieldDesc& d = water.heightfield;
-        // The FFT grid spans the surface rectangle (one period of the tiling); the frame's HeightField
-        // has the same rectangle (size = resolution cells).
-        lx_ = d.size.x;
-        ly_ = d.size.y;
+        // The FFT grid spans the surface rectangle (one period of the tiling), and a border around it
+        // where the surface does not tile (FftWindow, chosen per frame); the frame's HeightField has the
+        // same rectangle (size = resolution cells).
+        surface_lx_ = lx_ = d.size.x;
+        surface_ly_ = ly_ = d.size.y;
         spacing_ = std::max(lx_, ly_) / grid_;
+        pad_ = 0.0;
         const double floor = 2.0 * spacing_ / std::ldexp(1.0, kMaxHalvings);
         if (wavelength_ > 0.0 && wavelength_ < floor * (1.0 - 1e-9)) {
             std::ostringstream s;
@@ -106,7 +108,10 @@ public:
 
     void update(const FrameGeometry& frame) override {
         const HeightField& hf = *frame.objects.at(static_cast<std::size_t>(water_index_)).heightfield;
-        stats_ = surface_stats(hf, light_, n_mid());
+        const FftWindow window = fft_window(hf, surface_lx_, surface_ly_);
+        stats_ = frame_stats(hf, window);
+        exact_focus_ = caustics::regime::water_regime(frame).focus.first_focus_depth;
+        use_window(window);
         stats_of_ = &hf;
         stats_version_ = hf_version(hf);
     }
@@ -118,14 +123,14 @@ public:
         const ReceiverChart chart(frame, 2, 2);
         double depth = 0.0;
         const double level = mean_level(hf);
-        // A non-periodic surface is tapered over its border band: light entering there (or outside the
-        // surface) is not the scene's. Entry points of the light reaching a 9 x 9 net of the receiver: the
-        // flat surface's beam, less the reach of the rays the slopes bend, z |t_xy - t0_xy| / cos^3(t_t)
-        // (first order in the deviation, widened by its second-order factor 1 + deviation).
-        const double band = check_edges(hf).periodic ? 0.0 : taper_band_width(lx_, ly_);
+        // Light entering outside the surface (a non-tiling surface's border, FftWindow) is not the scene's.
+        // Entry points of the light reaching a 9 x 9 net of the receiver: the flat surface's beam, less the
+        // reach of the rays the slopes (the surface's and the border's) bend (reach_per_m).
+        const FftWindow window = fft_window(hf, surface_lx_, surface_ly_);
+        const double spacing = window.spacing(grid_);
         const glm::dvec2 beam_walk = glm::dvec2(refracted_.x, refracted_.y) / std::max(1e-9, -refracted_.z);
         const SurfaceStats stats = stats_for(hf);
-        const double reach_per_m = stats.deviation * (1.0 + stats.deviation) / std::pow(std::max(1e-3, -refracted_.z), 3);
+        const double reach = reach_per_m(stats);
         double margin = 1e300;
         for (int j = 0; j <= 8; ++j)
             for (int i = 0; i <= 8; ++i) {
@@ -133,12 +138,14 @@ public:
                 const double z = level - p.z;
                 depth = std::max(depth, z);
                 const glm::dvec2 rel = glm::dvec2(p) - z * beam_walk - glm::dvec2(hf.origin);
-                margin = std::min(margin, std::min({rel.x, rel.y, lx_ - rel.x, ly_ - rel.y}) - std::max(z, 0.0) * reach_per_m);
+                margin = std::min(margin, std::min({rel.x, rel.y, surface_lx_ - rel.x, surface_ly_ - rel.y}) -
+                                              std::max(z, 0.0) * reach);
             }
-        const Regime r = regime(hf, depth);
         const caustics::regime::WaterRegime w = caustics::regime::water_regime(frame);
-        const double sampling = sampling_margin(wavelength_for(stats), spacing_, stats.deviation);
-        std::vector<RegimeBound> bounds = {{"border_margin_m", margin, band, false},
+        const Regime r = regime(hf, depth, window, w.focus.first_focus_depth);
+        const double lambda = wavelength_for(stats, spacing);
+        const double sampling = sampling_margin(lambda, spacing, stats.deviation);
+        std::vector<RegimeBound> bounds = {{"border_margin_m", margin, 0.0, false},
                                            {"depth_over_first_focus", w.depth_over_first_focus(), kMaxFocusFraction, true},
                                            {"diffraction_epsilon", r.epsilon, kMaxEpsilon, true},
                                            {"spread_half_periods", r.spread, 1.0, true},
@@ -148,9 +155,13 @@ public:
         if (!bounds[0].holds()) {
             std::ostringstream s;
             s.precision(3);
-            s << "wave_optics: light reaching the receiver enters " << (margin < 0.0 ? "outside the surface" : "through its border band")
-              << " (" << margin << " m from its edge; the surface does not tile and is tapered over " << band
-              << " m at its edges)";
+            s << "wave_optics: light reaching the receiver may enter outside the surface (the closest entry, less the "
+                 "reach of the rays the slopes bend, lies "
+              << margin << " m from its edge";
+            if (!window.periodic)
+                s << "; the surface does not tile: the FFT window's border of " << window.pad
+                  << " m stands in for what lies beyond it";
+            s << ")";
             return AccuracyClaim::outside(s.str(), bounds);
         }
         if (!bounds[5].holds()) {
@@ -158,7 +169,7 @@ public:
             s.precision(3);
             s << "wave_optics: the refracted field's phase steps up to " << 1.0 / std::max(sampling, 1e-9)
               << " x pi per grid cell (rays deviate up to " << stats.deviation << " from the flat surface's at wavelength "
-              << wavelength_for(stats) << " m, spacing " << spacing_ << " m): it is sampled at " << sampling
+              << lambda << " m, spacing " << spacing << " m): it is sampled at " << sampling
               << " x its Nyquist rate, below " << kSamplingMargin << " (a longer wavelength or a larger grid)";
             return AccuracyClaim::outside(s.str(), bounds);
         }
@@ -194,19 +205,52 @@ private:
     // resampling would add kinks to the curvature).
     // The surface's part is computed by update() (it depends on the frame's geometry only, like an
     // acceleration structure) and kept for the frame's renders and claim; computed here otherwise.
-    Regime regime(const HeightField& hf, double depth) const {
+    // exact_focus: blocks/regime's first focus below the mean level (estimate_regime).
+    Regime regime(const HeightField& hf, double depth, const FftWindow& window, double exact_focus) const {
         const SurfaceStats stats = stats_for(hf);
-        return estimate_regime(stats, light_, n_mid(), wavelength_for(stats) * (samples_ > 1 ? 2.0 : 1.0), depth,
-                               std::min(lx_, ly_));
+        return estimate_regime(stats, light_, n_mid(),
+                               wavelength_for(stats, window.spacing(grid_)) * (samples_ > 1 ? 2.0 : 1.0), depth,
+                               std::min(window.lx, window.ly), exact_focus < 1e299 ? exact_focus : inf_focus());
     }
+    static double inf_focus() { return std::numeric_limits<double>::infinity(); }
     double n_mid() const { return ior_ + 0.5 * dispersion_; }
     SurfaceStats stats_for(const HeightField& hf) const {
-        return stats_of_ == &hf && stats_version_ == hf_version(hf) ? stats_ : surface_stats(hf, light_, n_mid());
+        return stats_of_ == &hf && stats_version_ == hf_version(hf)
+                   ? stats_
+                   : frame_stats(hf, fft_window(hf, surface_lx_, surface_ly_));
+    }
+    // The surface's statistics from its vertices; with a border (a non-tiling surface), the deviation is
+    // the larger of the surface's and that of the whole window as the FFT grid samples it: the border's
+    // slopes must be sampled too, and their light's reach kept off the receiver.
+    SurfaceStats frame_stats(const HeightField& hf, const FftWindow& window) const {
+        SurfaceStats stats = surface_stats(hf, light_, n_mid());
+        if (window.pad > 0.0) {
+            WaveFieldTable scratch(grid_, grid_, false);
+            const SurfaceSamples& s = scratch.resample(hf, window, surface_lx_, surface_ly_);
+            const SurfaceStats grid = surface_stats(s.height.data(), grid_, grid_, window.lx / grid_, window.ly / grid_,
+                                                    true, light_, n_mid());
+            stats.deviation = std::max(stats.deviation, grid.deviation);
+        }
+        return stats;
+    }
+    // How far sideways the rays the slopes bend reach, per metre of depth: z |t_xy - t0_xy| / cos^3(t_t),
+    // first order in the deviation, widened by its second-order factor 1 + deviation.
+    double reach_per_m(const SurfaceStats& stats) const {
+        return stats.deviation * (1.0 + stats.deviation) / std::pow(std::max(1e-3, -refracted_.z), 3);
     }
     // The shortest wavelength propagated for a surface with these statistics: the set one, or the
     // automatic choice from the refracted field's largest spatial frequency (regime.hpp).
-    double wavelength_for(const SurfaceStats& stats) const {
-        return wavelength_ > 0.0 ? wavelength_ : auto_wavelength(spacing_, stats.deviation);
+    double wavelength_for(const SurfaceStats& stats, double spacing) const {
+        return wavelength_ > 0.0 ? wavelength_ : auto_wavelength(spacing, stats.deviation);
+    }
+    // The frame's FFT window: a new size changes the grid spacing, so the propagators are rebuilt.
+    void use_window(const FftWindow& window) {
+        pad_ = window.pad;
+        if (window.lx == lx_ && window.ly == ly_) return;
+        lx_ = window.lx;
+        ly_ = window.ly;
+        spacing_ = window.spacing(grid_);
+        lambda_ = -1.0;
     }
     // Identifies the heights a HeightField holds now (its buffer and size, and a few samples), so that a
     // surface changed in place between update() and render() is not read from stale statistics.
@@ -222,6 +266,7 @@ private:
     const HeightField* stats_of_ = nullptr;
     std::size_t stats_version_ = 0;
     SurfaceStats stats_;
+    double exact_focus_ = 1e300;   // blocks/regime's first focus of the frame update() saw
     bool find_setup(const Scene& scene, std::string& why) const;
     void build_spectral(double lambda);
     void fill_table(const SurfaceSamples& surface, const std::vector<double>& depths, CausticOutput& out);
@@ -235,7 +280,9 @@ private:
     int slices_;
     bool thin_screen_;
     mutable int water_index_ = -1;
-    double lx_ = 1.0, ly_ = 1.0, lambda_ = 0.0, spacing_ = 1.0, ior_ = 1.33, dispersion_ = 0.0;
+    double surface_lx_ = 1.0, surface_ly_ = 1.0;   // the surface's rectangle
+    double lx_ = 1.0, ly_ = 1.0, pad_ = 0.0;       // the frame's FFT window (FftWindow)
+    double lambda_ = 0.0, spacing_ = 1.0, ior_ = 1.33, dispersion_ = 0.0;
     double cos_i_ = 1.0, irradiance_ = 1.0, absorption_ = 0.0, transmittance_ = 1.0;
     bool scene_fresnel_ = false;
     glm::dvec3 light_{0.0, 0.0, -1.0};
@@ -402,14 +449,15 @@ void WaveOpticsMethod::build_spectral(double lambda) {
 LookupGeometry WaveOpticsMethod::lookup_geometry(const HeightField& hf, const SurfaceSamples& surface,
                                                  const std::vector<double>& depths) const {
     LookupGeometry geo;
-    geo.origin = glm::dvec2(hf.origin);
+    geo.origin = glm::dvec2(hf.origin) - glm::dvec2(pad_);
     geo.lx = lx_;
     geo.ly = ly_;
     geo.level = surface.level;
     geo.depths = depths;
     geo.walk = spectral_.front().propagator->carrier_walk();
     geo.refracted = refracted_;
-    geo.taper_band = surface.periodic ? 0.0 : surface.taper_band;
+    geo.pad = surface.window.pad;
+    geo.reach_per_m = reach_per_m(stats_for(hf));
     geo.irradiance = irradiance_ * cos_i_ * transmittance_;
     geo.absorption = absorption_;
     return geo;
@@ -424,13 +472,17 @@ CausticOutput WaveOpticsMethod::render(const FrameGeometry& frame, const RenderR
         return t;
     };
     const HeightField& hf = *frame.objects.at(static_cast<std::size_t>(water_index_)).heightfield;
-    // 0. The wavelength for this surface (the propagators are rebuilt only when it changes).
-    const double lambda = wavelength_for(stats_for(hf));
+    if (stats_of_ != &hf || stats_version_ != hf_version(hf)) update(frame);   // the statistics, once per surface
+    // 0. The FFT window and the wavelength for this surface (the propagators are rebuilt only when
+    // either changes).
+    const FftWindow window = fft_window(hf, surface_lx_, surface_ly_);
+    use_window(window);
+    const double lambda = wavelength_for(stats_for(hf), spacing_);
     if (lambda != lambda_) build_spectral(lambda);
     out.health.add("wavelength_um", std::llround(1e6 * lambda_));
-    // 1. The surface on the FFT grid, periodic (tapered if its edges do not match), mean level removed.
-    const SurfaceSamples& surface = table_->resample(hf, lx_, ly_);
-    if (!surface.periodic) out.health.add("nonperiodic_surface", 1);
+    // 1. The surface on the FFT grid over the window (bordered if its edges do not match), mean level removed.
+    const SurfaceSamples& surface = table_->resample(hf, window, surface_lx_, surface_ly_);
+    if (!window.periodic) out.health.add("nonperiodic_surface", 1);
     out.stages_ms.emplace_back("resample", lap());
 
     // Periodic texture (caustics synth): the table at the texture's one depth below the base level,
@@ -497,7 +549,7 @@ CausticOutput WaveOpticsMethod::render(const FrameGeometry& frame, const RenderR
     }
     // The regime at the deepest point (regime.hpp): points past the first focus, and eps in percent.
     if (!depths.empty()) {
-        const Regime r = regime(hf, zmax);
+        const Regime r = regime(hf, zmax, window, exact_focus_);
         std::int64_t past = 0;
         for (const ShadePoint& p : points) past += surface.level - p.position.z > r.focus_depth ? 1 : 0;
         out.health.add("past_first_focus", past);
@@ -516,7 +568,7 @@ CausticOutput WaveOpticsMethod::render(const FrameGeometry& frame, const RenderR
     LookupCounters counters;
     table_->lookup(geo, points, values, counters);
     out.health.add("not_covered", counters.not_covered);
-    if (!surface.periodic) out.health.add("tapered_lookups", counters.tapered);
+    if (!window.periodic) out.health.add("tapered_lookups", counters.tapered);
     if (slices_ == 1 && !depths.empty()) {
         std::int64_t mismatch = 0;
         for (const ShadePoint& p : points) {

@@ -242,7 +242,7 @@ TEST(WaveFieldTable, OnVertexCopyEqualsBilinearResampling) {
             WaveFieldTable copy(grid, grid, false), bilinear(grid, grid, false);
             const auto& a = copy.resample(hf, 2.0, 2.0, WaveFieldTable::ResamplePath::Auto);
             const auto& b = bilinear.resample(hf, 2.0, 2.0, WaveFieldTable::ResamplePath::Bilinear);
-            EXPECT_EQ(a.periodic, periodic);
+            EXPECT_EQ(a.window.periodic, periodic);
             EXPECT_EQ(a.level, b.level);
             EXPECT_EQ(a.height, b.height) << "step " << step << " periodic " << periodic;
             // The copy really is the vertex grid: sample (i, j) is vertex (i step, j step), less the level.
