@@ -179,7 +179,10 @@ public:
             s << "wave_optics: the receiver lies " << w.depth << " m below the water, " << bounds[1].value
               << " of the way to the first focus at " << w.focus.first_focus_depth << " m, beyond " << kMaxFocusFraction
               << ": near and past the focus the coherent wave's fringes and fold diffraction converge to the "
-                 "geometric irradiance only weakly as the wavelength shrinks";
+                 "geometric irradiance only weakly as the wavelength shrinks (averaged over a receiver bin, blur = "
+                 "bin / sqrt(12), the error falls as the wavelength: sine_deep 0.91, 0.50, 0.24, 0.12 at grids 512 "
+                 "to 4096; drawn cases past the focus 0.16-0.64 at grid 2048; a grid of 8192 or more would be "
+                 "needed for 0.10)";
             return AccuracyClaim::outside(s.str(), bounds);
         }
         if (!bounds[4].holds()) {
