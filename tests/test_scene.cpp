@@ -218,6 +218,26 @@ TEST(HeightFieldGenerators, GaussianMatchesClosedForm) {
     EXPECT_NEAR(-1.0 / curvature, 0.25, 1e-6);
 }
 
+TEST(HeightFieldGenerators, TilesItsRectangleWhereOppositeEdgesAgree) {
+    // A sine along x with a whole number of periods over the rectangle tiles; 5.43 periods do not; a flat
+    // surface does; a field flagged periodic does whatever its edges hold.
+    HeightFieldDesc d;
+    d.size = {1.25, 1.25};
+    d.resolution = {250, 250};
+    d.generator = HeightGenerator::Sine;
+    d.amplitude = 0.01;
+    d.direction = {1.0, 0.0};
+    d.wavelength = 0.25;
+    EXPECT_TRUE(tiles_its_rectangle(generate_heightfield(d, 0.0, 0, 30.0)));
+    d.wavelength = 0.23;
+    HeightField cut = generate_heightfield(d, 0.0, 0, 30.0);
+    EXPECT_FALSE(tiles_its_rectangle(cut));
+    cut.periodic = true;
+    EXPECT_TRUE(tiles_its_rectangle(cut));
+    d.generator = HeightGenerator::Flat;
+    EXPECT_TRUE(tiles_its_rectangle(generate_heightfield(d, 0.0, 0, 30.0)));
+}
+
 TEST(HeightFieldGenerators, FlatHasExactlyZeroGradient) {
     HeightFieldDesc d;
     d.resolution = {16, 8};

@@ -8,7 +8,6 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 
 namespace caustics::wave_optics {
 
@@ -46,32 +45,17 @@ WaveFieldTable::WaveFieldTable(int nx, int ny, bool rgb) : nx_(nx), ny_(ny), rgb
 
 EdgeCheck check_edges(const HeightField& hf) {
     // Periodicity: flagged by the generator, or opposite edges equal to within 1e-3 of the height range.
-    using Range = std::pair<float, float>;
-    const float h0 = hf.height.empty() ? 0.0f : hf.height.front();
-    const auto [hmin, hmax] = tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, hf.height.size(), 1 << 15), Range(h0, h0),
-        [&](const tbb::blocked_range<std::size_t>& r, Range m) {
-            for (std::size_t k = r.begin(); k < r.end(); ++k) {
-                m.first = std::min(m.first, hf.height[k]);
-                m.second = std::max(m.second, hf.height[k]);
-            }
-            return m;
-        },
-        [](const Range& a, const Range& b) { return Range(std::min(a.first, b.first), std::max(a.second, b.second)); });
-    double mismatch = 0.0, edge_sum = 0.0;
+    double edge_sum = 0.0;
     std::size_t edge_count = 0;
     for (int j = 0; j < hf.ny; ++j) {
-        mismatch = std::max(mismatch, static_cast<double>(std::abs(hf.z(0, j) - hf.z(hf.nx - 1, j))));
         edge_sum += hf.z(0, j) + hf.z(hf.nx - 1, j);
         edge_count += 2;
     }
     for (int i = 0; i < hf.nx; ++i) {
-        mismatch = std::max(mismatch, static_cast<double>(std::abs(hf.z(i, 0) - hf.z(i, hf.ny - 1))));
         edge_sum += hf.z(i, 0) + hf.z(i, hf.ny - 1);
         edge_count += 2;
     }
-    const double tolerance = std::max(1e-3 * (hmax - hmin), 1e-9);
-    return {hf.periodic || mismatch <= tolerance, edge_sum / std::max<std::size_t>(edge_count, 1)};
+    return {tiles_its_rectangle(hf, 1e-3), edge_sum / std::max<std::size_t>(edge_count, 1)};
 }
 
 FftWindow fft_window(const EdgeCheck& edges, double lx, double ly) {

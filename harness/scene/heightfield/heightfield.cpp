@@ -204,4 +204,16 @@ HeightField generate_heightfield(const HeightFieldDesc& desc, double time, int f
     return hf;
 }
 
+bool tiles_its_rectangle(const HeightField& hf, double relative_tolerance) {
+    if (hf.periodic) return true;
+    if (hf.nx < 2 || hf.ny < 2 || hf.height.empty()) return false;
+    const auto [lo, hi] = std::minmax_element(hf.height.begin(), hf.height.end());
+    const double tolerance = std::max(relative_tolerance * (static_cast<double>(*hi) - *lo), 1e-9);
+    for (int j = 0; j < hf.ny; ++j)
+        if (std::abs(static_cast<double>(hf.z(0, j)) - hf.z(hf.nx - 1, j)) > tolerance) return false;
+    for (int i = 0; i < hf.nx; ++i)
+        if (std::abs(static_cast<double>(hf.z(i, 0)) - hf.z(i, hf.ny - 1)) > tolerance) return false;
+    return true;
+}
+
 }  // namespace caustics

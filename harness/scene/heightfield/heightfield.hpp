@@ -43,6 +43,11 @@ struct HeightField {
     TriangleMesh triangulate() const;
 };
 
+// Whether the surface tiles its rectangle: flagged periodic (noise generator), or its opposite edges equal
+// to within relative_tolerance of its height range (a sine with a whole number of periods over the
+// rectangle, a flat surface): vertex nx-1 then stands for vertex 0 again.
+bool tiles_its_rectangle(const HeightField& hf, double relative_tolerance = 1e-3);
+
 // A height map image (the `image` generator): its size from the header, and its first channel decoded as
 // floats (8/16-bit images read as [0, 1]). Both throw std::runtime_error with a one-line message naming
 // the file (a truncated or corrupt file included) and keep the image libraries' own text (libpng's
