@@ -220,7 +220,7 @@ TEST(HeightFieldGenerators, GaussianMatchesClosedForm) {
 
 TEST(HeightFieldGenerators, TilesItsRectangleWhereOppositeEdgesAgree) {
     // A sine along x with a whole number of periods over the rectangle tiles; 5.43 periods do not; a flat
-    // surface does; a field flagged periodic does whatever its edges hold.
+    // surface does; a field flagged periodic tiles whatever its edges hold.
     HeightFieldDesc d;
     d.size = {1.25, 1.25};
     d.resolution = {250, 250};

@@ -105,7 +105,9 @@ Regime estimate_regime(const SurfaceStats& stats, const glm::dvec3& light, doubl
     const double c = ior * cos_t - cos_i;
     Regime r;
     r.depth = depth;
-    r.focus_depth = std::min(stats.e_min < 0.0 ? -1.0 / stats.e_min : inf, exact_focus > 0.0 ? exact_focus : inf);
+    // blocks/regime says "no focus" with 1e300.
+    r.focus_depth = std::min(stats.e_min < 0.0 ? -1.0 / stats.e_min : inf,
+                             exact_focus > 0.0 && exact_focus < 1e299 ? exact_focus : inf);
     r.length_scale = stats.curvature > 0.0 ? 2.0 * std::numbers::pi * stats.slope / stats.curvature : inf;
     r.rho = std::isfinite(r.focus_depth) ? depth / r.focus_depth : 0.0;
     const double z_eff = depth / (cos_t * cos_t * cos_t);
@@ -123,7 +125,7 @@ std::string regime_violation(const Regime& r) {
     s.precision(3);
     if (r.rho >= 1.0) {
         s << "the receiver reaches " << r.depth << " m below the water, past the first focus at " << r.focus_depth
-          << " m (paraxial, steepest converging curvature): the refracted rays have crossed, and the coherent "
+          << " m (paraxial at the steepest converging curvature, or traced, the shallower): the refracted rays have crossed, and the coherent "
              "wave's interference fringes and fold diffraction converge to the geometric sum only weakly as the "
              "wavelength shrinks";
         return s.str();

@@ -120,8 +120,7 @@ const SurfaceSamples& WaveFieldTable::resample(const HeightField& hf, const FftW
             double sum = 0.0;
             if (on_vertices) {
                 for (int i = 0; i < nx_; ++i) {
-                    float h = row0[static_cast<std::size_t>(i) * vertex_step_x];
-                    if (taper) h = e + wx[static_cast<std::size_t>(i)] * wy[ju] * (h - e);
+                    const float h = row0[static_cast<std::size_t>(i) * vertex_step_x];   // no border here
                     dst[i] = h;
                     sum += h;
                 }

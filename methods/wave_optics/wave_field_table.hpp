@@ -57,7 +57,7 @@ struct LookupCounters {
 };
 
 // Whether the surface tiles (flagged periodic, or opposite edges equal to 1e-3 of the height range), and
-// the mean of its edge heights (what a non-periodic surface is tapered to).
+// the mean of its edge heights (what the FFT window's border around a non-periodic surface falls to).
 struct EdgeCheck {
     bool periodic = true;
     double edge_mean = 0.0;

@@ -109,8 +109,8 @@ public:
     void update(const FrameGeometry& frame) override {
         const HeightField& hf = *frame.objects.at(static_cast<std::size_t>(water_index_)).heightfield;
         const FftWindow window = fft_window(hf, surface_lx_, surface_ly_);
-        stats_ = frame_stats(hf, window);
-        exact_focus_ = caustics::regime::water_regime(frame).focus.first_focus_depth;
+        stats_ = frame_stats(hf, window, table_.get());
+        exact_focus_ = caustics::regime::analyze_focus(hf, light_, ior_, mean_level(hf)).first_focus_depth;
         use_window(window);
         stats_of_ = &hf;
         stats_version_ = hf_version(hf);
@@ -142,7 +142,7 @@ public:
                                               std::max(z, 0.0) * reach);
             }
         const caustics::regime::WaterRegime w = caustics::regime::water_regime(frame);
-        const Regime r = regime(hf, depth, window, w.focus.first_focus_depth);
+        const Regime r = regime(stats, depth, window, w.focus.first_focus_depth);
         const double lambda = wavelength_for(stats, spacing);
         const double sampling = sampling_margin(lambda, spacing, stats.deviation);
         std::vector<RegimeBound> bounds = {{"border_margin_m", margin, 0.0, false},
@@ -209,8 +209,7 @@ private:
     // The surface's part is computed by update() (it depends on the frame's geometry only, like an
     // acceleration structure) and kept for the frame's renders and claim; computed here otherwise.
     // exact_focus: blocks/regime's first focus below the mean level (estimate_regime).
-    Regime regime(const HeightField& hf, double depth, const FftWindow& window, double exact_focus) const {
-        const SurfaceStats stats = stats_for(hf);
+    Regime regime(const SurfaceStats& stats, double depth, const FftWindow& window, double exact_focus) const {
         return estimate_regime(stats, light_, n_mid(),
                                wavelength_for(stats, window.spacing(grid_)) * (samples_ > 1 ? 2.0 : 1.0), depth,
                                std::min(window.lx, window.ly), exact_focus < 1e299 ? exact_focus : inf_focus());
@@ -220,16 +219,18 @@ private:
     SurfaceStats stats_for(const HeightField& hf) const {
         return stats_of_ == &hf && stats_version_ == hf_version(hf)
                    ? stats_
-                   : frame_stats(hf, fft_window(hf, surface_lx_, surface_ly_));
+                   : frame_stats(hf, fft_window(hf, surface_lx_, surface_ly_), nullptr);
     }
     // The surface's statistics from its vertices; with a border (a non-tiling surface), the deviation is
     // the larger of the surface's and that of the whole window as the FFT grid samples it: the border's
-    // slopes must be sampled too, and their light's reach kept off the receiver.
-    SurfaceStats frame_stats(const HeightField& hf, const FftWindow& window) const {
+    // slopes must be sampled too, and their light's reach kept off the receiver. `table` resamples the
+    // window (update() passes the method's own; the const claim path, null, a scratch one).
+    SurfaceStats frame_stats(const HeightField& hf, const FftWindow& window, WaveFieldTable* table) const {
         SurfaceStats stats = surface_stats(hf, light_, n_mid());
         if (window.pad > 0.0) {
-            WaveFieldTable scratch(grid_, grid_, false);
-            const SurfaceSamples& s = scratch.resample(hf, window, surface_lx_, surface_ly_);
+            std::unique_ptr<WaveFieldTable> scratch;
+            if (table == nullptr) table = (scratch = std::make_unique<WaveFieldTable>(grid_, grid_, false)).get();
+            const SurfaceSamples& s = table->resample(hf, window, surface_lx_, surface_ly_);
             const SurfaceStats grid = surface_stats(s.height.data(), grid_, grid_, window.lx / grid_, window.ly / grid_,
                                                     true, light_, n_mid());
             stats.deviation = std::max(stats.deviation, grid.deviation);
@@ -552,7 +553,7 @@ CausticOutput WaveOpticsMethod::render(const FrameGeometry& frame, const RenderR
     }
     // The regime at the deepest point (regime.hpp): points past the first focus, and eps in percent.
     if (!depths.empty()) {
-        const Regime r = regime(hf, zmax, window, exact_focus_);
+        const Regime r = regime(stats_for(hf), zmax, window, exact_focus_);
         std::int64_t past = 0;
         for (const ShadePoint& p : points) past += surface.level - p.position.z > r.focus_depth ? 1 : 0;
         out.health.add("past_first_focus", past);

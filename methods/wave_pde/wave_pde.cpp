@@ -114,8 +114,9 @@ public:
         const FrameGeometry frame = build_frame_geometry(scene, 0);
         const ObjectInstance* water = find_water_interface(frame);
         if (water && tiles_box(*water->heightfield, caustic_volume(frame, *water, grid_, 0.0))) return base;
-        return Capability::no("sides=periodic needs a tiling water surface (noise generator) whose period is "
-                              "the texture box; use sides=auto, mirror or sponge");
+        return Capability::no("sides=periodic needs a water surface that repeats with the texture box as its "
+                              "period (a noise tile, or heights and slopes that agree on the box's opposite faces, "
+                              "as whole periods of a sine); use sides=auto, mirror or sponge");
     }
 
     void update(const FrameGeometry& frame) override {
@@ -318,8 +319,8 @@ public:
         return box;
     }
 
-    // The surface repeats with the box's period along x and y: the box is a tiling field's rectangle (flagged
-    // periodic, or opposite edges equal), or the surface's heights and slopes on the box's opposite faces
+    // The surface repeats with the box's period along x and y: the box is a periodic field's rectangle
+    // (flagged, the noise generator), or the surface's heights and slopes on the box's opposite faces
     // agree (sine.json: four whole periods of the sine over the 1 m floor the box covers), so that wrapping
     // the field at the faces continues it as the surface does. Mirror faces instead put a kink where the
     // slope does not vanish at the face (sine.json at grid 256: the edge periods' error 0.35 against the
@@ -327,12 +328,12 @@ public:
     static bool tiles_box(const HeightField& hf, const VolumeShape& box) {
         const glm::dvec2 ext = hf.extent(), box_ext(box.extent());
         const double tol = 1e-6 * std::max(ext.x, ext.y);
-        if (tiles_its_rectangle(hf) && std::fabs(box.origin.x - hf.origin.x) < tol &&
+        if (hf.periodic && std::fabs(box.origin.x - hf.origin.x) < tol &&
             std::fabs(box.origin.y - hf.origin.y) < tol && std::fabs(box_ext.x - ext.x) < tol &&
             std::fabs(box_ext.y - ext.y) < tol)
             return true;
         const glm::dvec2 lo(box.origin), hi = lo + box_ext;
-        if (lo.x < hf.origin.x - tol || lo.y < hf.origin.y - tol || hi.x > hf.origin.x + ext.x + tol ||
+        if (hf.height.empty() || lo.x < hf.origin.x - tol || lo.y < hf.origin.y - tol || hi.x > hf.origin.x + ext.x + tol ||
             hi.y > hf.origin.y + ext.y + tol)
             return false;
         const auto [hmin, hmax] = std::minmax_element(hf.height.begin(), hf.height.end());
@@ -456,7 +457,8 @@ MethodInfo wave_pde_info() {
          "the volume's x and y faces: sponge = the damping band (the paper; the texture darkens within "
          "about sqrt(6 depth h) of them, where the accumulated sheet is cut off), mirror = zero normal "
          "derivative (the sheet continues as its mirror image), periodic = the field wraps (only for a "
-         "tiling water surface whose period is the texture box), auto = periodic where it applies, else mirror; "
+         "water surface that repeats with the texture box as its period: a noise tile, or heights and slopes "
+         "that agree on the box's opposite faces), auto = periodic where it applies, else mirror; "
          "under oblique light (launch=phase_delay) auto bands an axis the refracted light crosses sideways and pads "
          "it with the light's reach and a soft-edged sheet (wave_launch.hpp)"},
         {"sponge", ParamType::Int, "12", 0, 256, {},

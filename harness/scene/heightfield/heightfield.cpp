@@ -206,14 +206,14 @@ HeightField generate_heightfield(const HeightFieldDesc& desc, double time, int f
 
 bool tiles_its_rectangle(const HeightField& hf, double relative_tolerance) {
     if (hf.periodic) return true;
-    if (hf.nx < 2 || hf.ny < 2 || hf.height.empty()) return false;
+    if (hf.nx < 2 || hf.ny < 2 || hf.height.size() != static_cast<std::size_t>(hf.nx) * hf.ny) return false;
+    // The edges' mismatch first: the height range (a pass over every vertex) only where it is not exactly 0.
+    double mismatch = 0.0;
+    for (int j = 0; j < hf.ny; ++j) mismatch = std::max(mismatch, std::abs(static_cast<double>(hf.z(0, j)) - hf.z(hf.nx - 1, j)));
+    for (int i = 0; i < hf.nx; ++i) mismatch = std::max(mismatch, std::abs(static_cast<double>(hf.z(i, 0)) - hf.z(i, hf.ny - 1)));
+    if (mismatch == 0.0) return true;
     const auto [lo, hi] = std::minmax_element(hf.height.begin(), hf.height.end());
-    const double tolerance = std::max(relative_tolerance * (static_cast<double>(*hi) - *lo), 1e-9);
-    for (int j = 0; j < hf.ny; ++j)
-        if (std::abs(static_cast<double>(hf.z(0, j)) - hf.z(hf.nx - 1, j)) > tolerance) return false;
-    for (int i = 0; i < hf.nx; ++i)
-        if (std::abs(static_cast<double>(hf.z(i, 0)) - hf.z(i, hf.ny - 1)) > tolerance) return false;
-    return true;
+    return mismatch <= std::max(relative_tolerance * (static_cast<double>(*hi) - *lo), 1e-9);
 }
 
 }  // namespace caustics

@@ -424,10 +424,38 @@ TEST(WaveOptics, DiffractionBoundUsesTheTracedFirstFocus) {
     const glm::dvec3 light = glm::normalize(c.scene.lights[0].direction);
     const double ior = c.scene.objects[0].material.ior;
     const wave_optics::SurfaceStats stats = wave_optics::surface_stats(hf, light, ior);
-    const double depth = c.regime.depth;
-    const wave_optics::Regime paraxial = wave_optics::estimate_regime(
-        stats, light, ior, wave_optics::auto_wavelength(1.25 / 512, stats.deviation), depth, 1.25);
+    const double lambda = 1e-6 * static_cast<double>(out.health.get("wavelength_um"));   // what was propagated
+    const glm::dvec2 size = hf.extent();
+    const wave_optics::FftWindow window = wave_optics::fft_window(hf, size.x, size.y);
+    const wave_optics::Regime paraxial =
+        wave_optics::estimate_regime(stats, light, ior, lambda, c.regime.depth, std::min(window.lx, window.ly));
     EXPECT_LT(paraxial.epsilon, wave_optics::kMaxEpsilon);
+}
+
+TEST(WaveFieldTable, BorderLiesOutsideTheSurfaceAndFallsToTheEdgeMean) {
+    // A ramp h = x over 1 m x 1 m does not tile: its window is 1 + 2/16 m wide. Grid samples over the surface
+    // are the surface's heights at i L' / N - pad; sample 0 (the window's corner, a border's far end) is the
+    // edge mean (0.5 for the ramp); the border falls monotonically from the edge to it.
+    HeightField hf;
+    hf.nx = hf.ny = 65;
+    hf.spacing = glm::dvec2(1.0 / 64);
+    hf.height.resize(static_cast<std::size_t>(hf.nx) * hf.ny);
+    for (int j = 0; j < hf.ny; ++j)
+        for (int i = 0; i < hf.nx; ++i) hf.height[static_cast<std::size_t>(j) * hf.nx + i] = static_cast<float>(i / 64.0);
+    const wave_optics::FftWindow w = wave_optics::fft_window(hf, 1.0, 1.0);
+    ASSERT_FALSE(w.periodic);
+    EXPECT_DOUBLE_EQ(w.pad, 1.0 / 16.0);
+    EXPECT_DOUBLE_EQ(w.lx, 1.125);
+    EXPECT_NEAR(w.edge_mean, 0.5, 1e-6);
+    const int n = 72;   // 1.125 / 72 = 1/64: the window's samples fall on the surface's vertices
+    wave_optics::WaveFieldTable table(n, n, false);
+    const wave_optics::SurfaceSamples& s = table.resample(hf, w, 1.0, 1.0);
+    auto at = [&](int i, int j) { return s.height[static_cast<std::size_t>(j) * n + i] + s.level; };
+    const int row = n / 2;   // a row inside the surface: the y border's weight is 1 there
+    for (int i = 4; i <= 68; ++i) EXPECT_NEAR(at(i, row), (i - 4) / 64.0, 1e-6) << "sample " << i;
+    EXPECT_NEAR(at(0, row), 0.5, 1e-6);
+    for (int i = 0; i < 4; ++i) EXPECT_GT(at(i, row), at(i + 1, row) - 1e-7) << "left border, sample " << i;   // 0.5 -> 0
+    for (int i = 69; i < n - 1; ++i) EXPECT_GT(at(i, row), at(i + 1, row) - 1e-7) << "right border, sample " << i;   // 1 -> 0.5
 }
 
 }  // namespace

@@ -225,7 +225,8 @@ TEST(WavePropagator, CachedTransferFunctionsMatchAFreshPropagator) {
 }
 
 // A surface of grid (or a multiple of grid) cells puts every grid sample on a vertex: the copy path
-// must equal the bilinear path bit for bit, tapered (edges that do not match) or not.
+// must equal the bilinear path bit for bit. A surface whose edges do not match gets a border (its window is
+// larger, so its samples are off the vertices) and takes the bilinear path either way.
 TEST(WaveFieldTable, OnVertexCopyEqualsBilinearResampling) {
     using wave_optics::WaveFieldTable;
     for (int step : {1, 2}) {
