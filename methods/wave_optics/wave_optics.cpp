@@ -72,7 +72,6 @@ public:
         surface_lx_ = lx_ = d.size.x;
         surface_ly_ = ly_ = d.size.y;
         spacing_ = std::max(lx_, ly_) / grid_;
-        pad_ = 0.0;
         const double floor = 2.0 * spacing_ / std::ldexp(1.0, kMaxHalvings);
         if (wavelength_ > 0.0 && wavelength_ < floor * (1.0 - 1e-9)) {
             std::ostringstream s;
@@ -108,10 +107,10 @@ public:
 
     void update(const FrameGeometry& frame) override {
         const HeightField& hf = *frame.objects.at(static_cast<std::size_t>(water_index_)).heightfield;
-        const FftWindow window = fft_window(hf, surface_lx_, surface_ly_);
-        stats_ = frame_stats(hf, window, table_.get());
+        window_ = fft_window(hf, surface_lx_, surface_ly_);
+        stats_ = frame_stats(hf, window_, table_.get());
         exact_focus_ = caustics::regime::analyze_focus(hf, light_, ior_, mean_level(hf)).first_focus_depth;
-        use_window(window);
+        use_window(window_);
         stats_of_ = &hf;
         stats_version_ = hf_version(hf);
     }
@@ -126,7 +125,7 @@ public:
         // Light entering outside the surface (a non-tiling surface's border, FftWindow) is not the scene's.
         // Entry points of the light reaching a 9 x 9 net of the receiver: the flat surface's beam, less the
         // reach of the rays the slopes (the surface's and the border's) bend (reach_per_m).
-        const FftWindow window = fft_window(hf, surface_lx_, surface_ly_);
+        const FftWindow window = window_for(hf);
         const double spacing = window.spacing(grid_);
         const glm::dvec2 beam_walk = glm::dvec2(refracted_.x, refracted_.y) / std::max(1e-9, -refracted_.z);
         const SurfaceStats stats = stats_for(hf);
@@ -212,14 +211,15 @@ private:
     Regime regime(const SurfaceStats& stats, double depth, const FftWindow& window, double exact_focus) const {
         return estimate_regime(stats, light_, n_mid(),
                                wavelength_for(stats, window.spacing(grid_)) * (samples_ > 1 ? 2.0 : 1.0), depth,
-                               std::min(window.lx, window.ly), exact_focus < 1e299 ? exact_focus : inf_focus());
+                               std::min(window.lx, window.ly), exact_focus);
     }
-    static double inf_focus() { return std::numeric_limits<double>::infinity(); }
     double n_mid() const { return ior_ + 0.5 * dispersion_; }
+    bool updated_for(const HeightField& hf) const { return stats_of_ == &hf && stats_version_ == hf_version(hf); }
+    FftWindow window_for(const HeightField& hf) const {
+        return updated_for(hf) ? window_ : fft_window(hf, surface_lx_, surface_ly_);
+    }
     SurfaceStats stats_for(const HeightField& hf) const {
-        return stats_of_ == &hf && stats_version_ == hf_version(hf)
-                   ? stats_
-                   : frame_stats(hf, fft_window(hf, surface_lx_, surface_ly_), nullptr);
+        return updated_for(hf) ? stats_ : frame_stats(hf, window_for(hf), nullptr);
     }
     // The surface's statistics from its vertices; with a border (a non-tiling surface), the deviation is
     // the larger of the surface's and that of the whole window as the FFT grid samples it: the border's
@@ -247,9 +247,8 @@ private:
     double wavelength_for(const SurfaceStats& stats, double spacing) const {
         return wavelength_ > 0.0 ? wavelength_ : auto_wavelength(spacing, stats.deviation);
     }
-    // The frame's FFT window: a new size changes the grid spacing, so the propagators are rebuilt.
+    // The propagators' FFT window: a new size changes the grid spacing, so they are rebuilt.
     void use_window(const FftWindow& window) {
-        pad_ = window.pad;
         if (window.lx == lx_ && window.ly == ly_) return;
         lx_ = window.lx;
         ly_ = window.ly;
@@ -270,7 +269,8 @@ private:
     const HeightField* stats_of_ = nullptr;
     std::size_t stats_version_ = 0;
     SurfaceStats stats_;
-    double exact_focus_ = 1e300;   // blocks/regime's first focus of the frame update() saw
+    FftWindow window_;             // the FFT window of the frame update() saw
+    double exact_focus_ = 1e300;   // blocks/regime's first focus of that frame
     bool find_setup(const Scene& scene, std::string& why) const;
     void build_spectral(double lambda);
     void fill_table(const SurfaceSamples& surface, const std::vector<double>& depths, CausticOutput& out);
@@ -285,7 +285,7 @@ private:
     bool thin_screen_;
     mutable int water_index_ = -1;
     double surface_lx_ = 1.0, surface_ly_ = 1.0;   // the surface's rectangle
-    double lx_ = 1.0, ly_ = 1.0, pad_ = 0.0;       // the frame's FFT window (FftWindow)
+    double lx_ = 1.0, ly_ = 1.0;                   // the window the propagators were built for (use_window)
     double lambda_ = 0.0, spacing_ = 1.0, ior_ = 1.33, dispersion_ = 0.0;
     double cos_i_ = 1.0, irradiance_ = 1.0, absorption_ = 0.0, transmittance_ = 1.0;
     bool scene_fresnel_ = false;
@@ -453,7 +453,7 @@ void WaveOpticsMethod::build_spectral(double lambda) {
 LookupGeometry WaveOpticsMethod::lookup_geometry(const HeightField& hf, const SurfaceSamples& surface,
                                                  const std::vector<double>& depths) const {
     LookupGeometry geo;
-    geo.origin = glm::dvec2(hf.origin) - glm::dvec2(pad_);
+    geo.origin = glm::dvec2(hf.origin) - glm::dvec2(surface.window.pad);
     geo.lx = lx_;
     geo.ly = ly_;
     geo.level = surface.level;
@@ -476,11 +476,9 @@ CausticOutput WaveOpticsMethod::render(const FrameGeometry& frame, const RenderR
         return t;
     };
     const HeightField& hf = *frame.objects.at(static_cast<std::size_t>(water_index_)).heightfield;
-    if (stats_of_ != &hf || stats_version_ != hf_version(hf)) update(frame);   // the statistics, once per surface
-    // 0. The FFT window and the wavelength for this surface (the propagators are rebuilt only when
-    // either changes).
-    const FftWindow window = fft_window(hf, surface_lx_, surface_ly_);
-    use_window(window);
+    if (!updated_for(hf)) update(frame);   // the window and the statistics, once per surface
+    // 0. The wavelength for this surface and window (the propagators are rebuilt only when either changes).
+    const FftWindow& window = window_;
     const double lambda = wavelength_for(stats_for(hf), spacing_);
     if (lambda != lambda_) build_spectral(lambda);
     out.health.add("wavelength_um", std::llround(1e6 * lambda_));

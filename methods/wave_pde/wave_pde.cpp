@@ -336,8 +336,9 @@ public:
         if (hf.height.empty() || lo.x < hf.origin.x - tol || lo.y < hf.origin.y - tol || hi.x > hf.origin.x + ext.x + tol ||
             hi.y > hf.origin.y + ext.y + tol)
             return false;
-        const auto [hmin, hmax] = std::minmax_element(hf.height.begin(), hf.height.end());
-        const double dh = std::max(1e-3 * (static_cast<double>(*hmax) - *hmin), 1e-9);
+        double hmin = 0.0, hmax = 0.0;
+        height_range(hf, hmin, hmax);
+        const double dh = std::max(1e-3 * (hmax - hmin), 1e-9);
         constexpr int kSamples = 64;
         double gmax = 0.0, worst_h = 0.0, worst_g = 0.0;
         auto compare = [&](glm::dvec2 a, glm::dvec2 b) {

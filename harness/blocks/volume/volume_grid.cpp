@@ -283,16 +283,6 @@ double signed_distance_to_interface(const HeightField& hf, const glm::dvec3& p) 
 
 namespace {
 
-// The height range of a height field's vertices.
-void height_range(const HeightField& hf, double& hmin, double& hmax) {
-    hmin = 1e300;
-    hmax = -1e300;
-    for (float z : hf.height) {
-        hmin = std::min(hmin, double(z));
-        hmax = std::max(hmax, double(z));
-    }
-}
-
 // Cubic cells of `spacing` over the rectangle [lo, hi], from one cell above the water's highest point
 // (hmax) to one below the lowest receiver (zmin), centred on the rectangle.
 VolumeShape cells_over(const glm::dvec2& lo, const glm::dvec2& hi, double spacing, double hmax, double zmin) {

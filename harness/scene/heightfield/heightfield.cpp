@@ -204,6 +204,15 @@ HeightField generate_heightfield(const HeightFieldDesc& desc, double time, int f
     return hf;
 }
 
+void height_range(const HeightField& hf, double& hmin, double& hmax) {
+    hmin = 1e300;
+    hmax = -1e300;
+    for (float z : hf.height) {
+        hmin = std::min(hmin, double(z));
+        hmax = std::max(hmax, double(z));
+    }
+}
+
 bool tiles_its_rectangle(const HeightField& hf, double relative_tolerance) {
     if (hf.periodic) return true;
     if (hf.nx < 2 || hf.ny < 2 || hf.height.size() != static_cast<std::size_t>(hf.nx) * hf.ny) return false;
@@ -212,8 +221,9 @@ bool tiles_its_rectangle(const HeightField& hf, double relative_tolerance) {
     for (int j = 0; j < hf.ny; ++j) mismatch = std::max(mismatch, std::abs(static_cast<double>(hf.z(0, j)) - hf.z(hf.nx - 1, j)));
     for (int i = 0; i < hf.nx; ++i) mismatch = std::max(mismatch, std::abs(static_cast<double>(hf.z(i, 0)) - hf.z(i, hf.ny - 1)));
     if (mismatch == 0.0) return true;
-    const auto [lo, hi] = std::minmax_element(hf.height.begin(), hf.height.end());
-    return mismatch <= std::max(relative_tolerance * (static_cast<double>(*hi) - *lo), 1e-9);
+    double lo = 0.0, hi = 0.0;
+    height_range(hf, lo, hi);
+    return mismatch <= std::max(relative_tolerance * (hi - lo), 1e-9);
 }
 
 }  // namespace caustics

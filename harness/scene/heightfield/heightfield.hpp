@@ -43,6 +43,9 @@ struct HeightField {
     TriangleMesh triangulate() const;
 };
 
+// The lowest and highest vertex heights (1e300 and -1e300 for an empty field).
+void height_range(const HeightField& hf, double& hmin, double& hmax);
+
 // Whether the surface tiles its rectangle: flagged periodic (noise generator), or its opposite edges equal
 // to within relative_tolerance of its height range (a sine with a whole number of periods over the
 // rectangle, a flat surface): vertex nx-1 then stands for vertex 0 again.
