@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <string>
+#include <vector>
 
 #include <caustics/reference/analytic_truth.hpp>
 #include <caustics/scene/scene.hpp>
@@ -27,6 +28,22 @@ constexpr int kDefaultConformanceCases = 12;
 inline std::uint64_t conformance_seed() {
     const char* s = std::getenv("CAUSTICS_CONFORMANCE_SEED");
     return s && *s ? std::strtoull(s, nullptr, 10) : kDefaultConformanceSeed;
+}
+
+// CAUSTICS_CONFORMANCE_ONLY: a comma-separated list of case indices to judge instead of the first N (to
+// replay or re-measure some cases of a draw); empty when unset.
+inline std::vector<int> conformance_only_cases() {
+    std::vector<int> out;
+    const char* s = std::getenv("CAUSTICS_CONFORMANCE_ONLY");
+    if (!s) return out;
+    for (const char* p = s; *p;) {
+        char* end = nullptr;
+        const long v = std::strtol(p, &end, 10);
+        if (end == p) break;
+        if (v >= 0 && v <= 100000) out.push_back(static_cast<int>(v));
+        p = *end == ',' ? end + 1 : end;
+    }
+    return out;
 }
 
 inline int conformance_case_count() {
