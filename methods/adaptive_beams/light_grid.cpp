@@ -416,6 +416,11 @@ void LightGrid::leaf_beams(const Lattice& lattice, const std::vector<Cell>& leav
         }
     });
     st.cells = static_cast<std::int64_t>(leaves.size());
+    std::size_t total = 0;
+    for (const TriBeams& tb : per) total += tb.beams.size();
+    out.beams.reserve(total);
+    out.ends.reserve(total);
+    out.end_object.reserve(total);
     for (TriBeams& tb : per) {
         st.discarded_tir += tb.tir;
         st.discarded_energy += tb.energy;
@@ -429,8 +434,11 @@ void LightGrid::leaf_beams(const Lattice& lattice, const std::vector<Cell>& leav
     st.beams_generated = static_cast<std::int64_t>(out.beams.size());
 }
 
-BeamSet LightGrid::generate() const {
-    BeamSet out;
+void LightGrid::generate(BeamSet& out) const {
+    out.beams.clear();
+    out.ends.clear();
+    out.end_object.clear();
+    out.stats = GridStats{};
     Lattice lattice;
     const int max_level = s_.adaptive ? s_.iterations : 0;
     const int s0 = res_ / s_.grid;
@@ -459,7 +467,6 @@ BeamSet LightGrid::generate() const {
         cells.swap(next);
     }
     leaf_beams(lattice, leaves, s0, out);
-    return out;
 }
 
 }  // namespace caustics::adaptive_beams

@@ -74,7 +74,9 @@ public:
     // Beams are extruded at most to the box of the scene's bounds and the camera (grown by 5 %).
     LightGrid(const FrameGeometry& frame, const RayTracer& tracer, const GridSettings& settings);
 
-    BeamSet generate() const;
+    // The beams into `out`, replacing what it held (its vectors keep their capacity: a set reused over frames
+    // does not map its hundreds of megabytes afresh each frame).
+    void generate(BeamSet& out) const;
 
     const LightProjection& projection() const { return proj_; }
     int resolution() const { return res_; }
