@@ -7,6 +7,7 @@
 // the second argument is the thread count (1 or 2); BM_VolumeView sweeps the volume view's levers
 // (volume_step, volume_subpixels: 1, 1 is the paper's one ray per pixel centre, 2, 2 the defaults);
 // BM_OracleAndSurface compares the split oracle and camera surface settings with the former defaults;
+// BM_VolumeLanes the volume view's integrals in AVX2 lanes (1) against one ray at a time (0);
 // BM_HeapPolicy times the defaults under glibc's default heap limits (0: a fresh process's, before the
 // adaptation util/heap_policy.hpp describes) and under the program's policy (1).
 #include <benchmark/benchmark.h>
@@ -108,6 +109,12 @@ void BM_VolumeBeams(benchmark::State& state) {
     run(state, {{"volume_iterations", std::to_string(state.range(2))}});
 }
 
+// The volume view's integrals four rays at a time in AVX2 lanes (1, the default) or one at a time (0): the
+// same values to the bit.
+void BM_VolumeLanes(benchmark::State& state) {
+    run(state, {{"volume_lanes", state.range(2) ? "true" : "false"}});
+}
+
 void BM_HeapPolicy(benchmark::State& state) {
 #if defined(__GLIBC__)
     if (state.range(2) == 0) {
@@ -123,6 +130,7 @@ void BM_HeapPolicy(benchmark::State& state) {
 }  // namespace
 
 BENCHMARK(BM_VolumeBeams)->ArgsProduct({{0, 1}, {2}, {-1, 2, 1}})->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true)->UseRealTime();
+BENCHMARK(BM_VolumeLanes)->ArgsProduct({{0, 1}, {1, 2}, {0, 1}})->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true)->UseRealTime();
 BENCHMARK(BM_HeapPolicy)->ArgsProduct({{0, 1}, {2}, {0, 1}})->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true)->UseRealTime();
 BENCHMARK(BM_OracleAndSurface)->ArgsProduct({{0, 1}, {2}, {0, 1, 2}})->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true)->UseRealTime();
 BENCHMARK(BM_Adaptive)->ArgsProduct({{0, 1}, {1, 2}})->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true)->UseRealTime();

@@ -43,6 +43,7 @@ public:
         acc_.volume.refine = p.get_float("volume_refine");
         acc_.volume.subpixels = static_cast<int>(p.get_int("volume_subpixels"));
         acc_.volume.edge_subpixels = static_cast<int>(p.get_int("volume_edge_subpixels"));
+        acc_.volume.lanes = p.get_bool("volume_lanes");
         acc_.receiver_samples = static_cast<int>(p.get_int("receiver_samples"));
         acc_.filter = static_cast<int>(p.get_int("filter"));
         acc_.surface_coverage = p.get_enum("camera_surface") == "coverage";
@@ -219,6 +220,9 @@ MethodInfo method_info() {
          "camera_volume: rays per side of a refined pixel whose sub-rays' radiances spread by more than "
          "volume_refine of their mean (a hull's edge crosses it: the light cone's surface); at most "
          "volume_subpixels, or volume_subpixels 1 (one ray: no spread to test): no second pass"},
+        {"volume_lanes", ParamType::Bool, "true", 0, 0, {},
+         "evaluate the volume view's ray-beam integrals four rays at a time in AVX2 lanes where the CPU has AVX2 "
+         "(the same values to the bit; false: one ray at a time, for timing comparisons)"},
         {"receiver_samples", ParamType::Int, "3", 1, 8, {},
          "point-in-beam samples per side of each receiver bin (their mean is the bin's mean irradiance)"},
         {"camera_surface", ParamType::Enum, "coverage", 0, 0, {"coverage", "point"},

@@ -30,6 +30,13 @@ public:
     // The radiance volume_radiance(b, medium, o, w, s_max, samples, counters, s_min) returns.
     double radiance(const glm::dvec3& w, double s_max, int samples, BeamCounters& counters, double s_min = 0.0) const;
 
+    // out[j] = radiance(w[j], s_max[j], samples, counters, s_min) for j < n, to the bit: the edge polynomials'
+    // roots of four rays and the quadrature nodes four at a time in AVX2 lanes (ray_beam_lanes.cpp), where
+    // lanes_available(); elsewhere one ray at a time.
+    void radiance_lanes(const glm::dvec3* w, const double* s_max, int n, int samples, BeamCounters& counters,
+                        double s_min, double* out) const;
+    static bool lanes_available();
+
 private:
     glm::dvec3 n_, e1_, e2_;
     double yo_ = 0.0, y0_ = 0.0, y1_ = 0.0;

@@ -38,10 +38,12 @@ double gbuffer_depth(const CameraGBuffer& g, const CameraModel& cam, std::size_t
 
 // Mean over each pass pixel's rays of the sum over beams of their integrals, added to out[pixel] (pixels
 // of the pass only; each beam's share is divided by the rays per pixel as it is added). Bands of rows are independent; each walks the beams in order.
-void evaluate(const Pass& pass, const std::vector<VolumeBeam>& beams, const CameraGBuffer& g, int samples,
+void evaluate(const Pass& pass, const std::vector<VolumeBeam>& beams, const CameraGBuffer& g, const VolumeSettings& settings,
               std::vector<double>& out, VolumeStats& stats) {
     const int W = g.width, H = g.height;
     const int bands = (H + kBandRows - 1) / kBandRows;
+    const int samples = settings.samples;
+    const bool lanes = settings.lanes && RayBeam::lanes_available();
     std::vector<VolumeStats> per_band(static_cast<std::size_t>(bands));
     tbb::parallel_for(tbb::blocked_range<int>(0, bands, 1), [&](const tbb::blocked_range<int>& br) {
         for (int band = br.begin(); band != br.end(); ++band) {
@@ -50,6 +52,7 @@ void evaluate(const Pass& pass, const std::vector<VolumeBeam>& beams, const Came
             for (int y = r0; y <= r1 && !any; ++y) any = !pass.columns[static_cast<std::size_t>(y)].empty();
             if (!any) continue;
             BeamCounters counters;
+            std::vector<double> values;
             VolumeStats& st = per_band[static_cast<std::size_t>(band)];
             for (const VolumeBeam& vb : beams) {
                 const Coverage& cov = *vb.pixels;
@@ -62,19 +65,38 @@ void evaluate(const Pass& pass, const std::vector<VolumeBeam>& beams, const Came
                     const int ns = row_spans(cov, y, W, pass.box, spans);
                     for (int k = 0; k < ns; ++k) {
                         auto it = std::lower_bound(cols.begin(), cols.end(), spans[k][0]);
-                        for (; it != cols.end() && *it <= spans[k][1]; ++it) {
-                            const std::size_t i = g.index(*it, y);
-                            const auto r = static_cast<std::size_t>(pass.first[i]);
-                            double sum = 0.0;
-                            for (int q = 0; q < pass.per_pixel; ++q) {
-                                const double v = vb.beam->radiance(pass.dir[r + q], pass.s_max[r + q], samples,
-                                                                   counters, kVolumeNearDistance);
-                                sum += v;
-                                if (pass.ray_value) (*pass.ray_value)[r + q] += v;
+                        while (it != cols.end() && *it <= spans[k][1]) {
+                            // A run of the span's pixels whose rays lie one after the other: their integrals in
+                            // lanes (ray_beam.hpp), then each pixel's mean in order.
+                            auto end = it + 1;
+                            while (end != cols.end() && *end <= spans[k][1] &&
+                                   pass.first[g.index(*end, y)] == pass.first[g.index(*(end - 1), y)] + pass.per_pixel)
+                                ++end;
+                            const auto r0 = static_cast<std::size_t>(pass.first[g.index(*it, y)]);
+                            const int pixels = static_cast<int>(end - it), rays = pixels * pass.per_pixel;
+                            values.resize(static_cast<std::size_t>(rays));
+                            if (lanes)
+                                vb.beam->radiance_lanes(&pass.dir[r0], &pass.s_max[r0], rays, samples, counters,
+                                                        kVolumeNearDistance, values.data());
+                            else
+                                for (int q = 0; q < rays; ++q)
+                                    values[static_cast<std::size_t>(q)] =
+                                        vb.beam->radiance(pass.dir[r0 + static_cast<std::size_t>(q)],
+                                                          pass.s_max[r0 + static_cast<std::size_t>(q)], samples, counters,
+                                                          kVolumeNearDistance);
+                            for (int p = 0; p < pixels; ++p, ++it) {
+                                const std::size_t i = g.index(*it, y);
+                                const std::size_t r = r0 + static_cast<std::size_t>(p * pass.per_pixel);
+                                double sum = 0.0;
+                                for (int q = 0; q < pass.per_pixel; ++q) {
+                                    const double v = values[static_cast<std::size_t>(p * pass.per_pixel + q)];
+                                    sum += v;
+                                    if (pass.ray_value) (*pass.ray_value)[r + q] += v;
+                                }
+                                out[i] += pass.per_pixel > 1 ? sum / pass.per_pixel : sum;
+                                ++st.fill;
+                                st.rays += pass.per_pixel;
                             }
-                            out[i] += pass.per_pixel > 1 ? sum / pass.per_pixel : sum;
-                            ++st.fill;
-                            st.rays += pass.per_pixel;
                         }
                     }
                 }
@@ -110,7 +132,7 @@ std::vector<int> lattice(int n, int step) {
 // is then the rays' mean).
 template <class Want>
 void box_pass(const Want& want, int sub, const std::vector<VolumeBeam>& beams, const CameraModel& cam,
-              const CameraGBuffer& g, const RayTracer* tracer, int samples, std::vector<double>& out,
+              const CameraGBuffer& g, const RayTracer* tracer, const VolumeSettings& settings, std::vector<double>& out,
               std::vector<std::uint8_t>* edge, double refine, VolumeStats& stats) {
     const int W = g.width, H = g.height;
     const std::size_t np = static_cast<std::size_t>(W) * static_cast<std::size_t>(H);
@@ -156,7 +178,7 @@ void box_pass(const Want& want, int sub, const std::vector<VolumeBeam>& beams, c
                 }
             });
         if (full.ray_value) ray_value.assign(full.dir.size(), 0.0);
-        if (!full.dir.empty()) evaluate(full, beams, g, samples, out, stats);
+        if (!full.dir.empty()) evaluate(full, beams, g, settings, out, stats);
         // The band's rows leave the pass: the next band's indices start again at 0.
         for (int y = y_begin; y < y_next; ++y) {
             for (int x : full.columns[static_cast<std::size_t>(y)]) {
@@ -200,7 +222,7 @@ void render_volume(const std::vector<VolumeBeam>& beams, const CameraModel& cam,
         }
     }
     std::vector<double> value(np, 0.0);
-    evaluate(nodes, beams, g, s.samples, value, stats);
+    evaluate(nodes, beams, g, s, value, stats);
     if (step == 1 && sub == 1) {
         for (std::size_t i = 0; i < np; ++i) volume.pixels[i] = static_cast<float>(value[i]);
         stats.refined += static_cast<std::int64_t>(np);   // every pixel evaluated in full
@@ -268,11 +290,11 @@ void render_volume(const std::vector<VolumeBeam>& beams, const CameraModel& cam,
     auto in_full = [&](std::size_t i) { return refined[i] && (sub > 1 || nodes.first[i] < 0); };
     const int edge_sub = std::max(sub, s.edge_subpixels);
     std::vector<std::uint8_t> edge(edge_sub > sub ? np : 0, 0);
-    box_pass(in_full, sub, beams, cam, g, tracer, s.samples, full_value, edge_sub > sub ? &edge : nullptr, s.refine,
+    box_pass(in_full, sub, beams, cam, g, tracer, s, full_value, edge_sub > sub ? &edge : nullptr, s.refine,
              stats);
     if (edge_sub > sub) {
         std::vector<double> edge_value(np, 0.0);
-        box_pass([&](std::size_t i) { return edge[i] != 0; }, edge_sub, beams, cam, g, tracer, s.samples, edge_value,
+        box_pass([&](std::size_t i) { return edge[i] != 0; }, edge_sub, beams, cam, g, tracer, s, edge_value,
                  nullptr, s.refine, stats);
         for (std::size_t i = 0; i < np; ++i)
             if (edge[i]) full_value[i] = edge_value[i], ++stats.edge_pixels;

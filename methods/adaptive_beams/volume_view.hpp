@@ -38,6 +38,7 @@ struct VolumeSettings {
     double refine = 1.0;   // a block whose nodes differ by more than this fraction of their mean is refined
     int subpixels = 2;     // rays per side of a refined pixel
     int edge_subpixels = 1;   // rays per side of a refined pixel whose sub-rays disagree (a hull's edge in it)
+    bool lanes = true;     // the ray-beam integrals four rays at a time in AVX2 lanes where the CPU has them
 };
 
 struct VolumeStats {

@@ -6,7 +6,10 @@
 // crossing root across an end of the slab (a sub-interval split or not), which changes only the
 // quadrature error of that piece; those are counted and must stay rare and within that error (1e-3).
 #include <cmath>
+#include <cstdio>
+#include <cstring>
 #include <random>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -83,4 +86,56 @@ TEST(AdaptiveBeamsRayBeam, EqualsThePointwiseIntegralToRounding) {
     EXPECT_GT(flipped, 50);
     EXPECT_GT(hits, 20000);
     EXPECT_LE(split, hits / 1000);
+}
+
+TEST(AdaptiveBeamsRayBeam, LanesEqualTheOneRayFormToTheBit) {
+    // radiance_lanes on batches of 1 to 13 rays (full and partial groups of four lanes, nodes carried over
+    // between groups) against radiance ray by ray, with the clamp counts: the same values and counts, bit
+    // for bit. Rays parallel to the slab (a bounding-sphere interval) and beams past a focus included.
+    std::mt19937_64 rng(29);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    const MediumCoefficients medium{0.1, 0.4, 0.3};
+    int beams = 0, rays = 0, nonzero = 0, parallel = 0, flipped = 0;
+    long long clamped = 0;
+    std::vector<glm::dvec3> w;
+    std::vector<double> s_max, lanes;
+    while (beams < 300) {
+        Beam b;
+        if (!random_beam(rng, b)) continue;
+        ++beams;
+        flipped += b.flipped;
+        const glm::dvec3 o = beams % 2 ? glm::dvec3(0.02 * u(rng), 0.02 * u(rng), 1.0 + u(rng))
+                                       : glm::dvec3(3.0 * u(rng), 3.0 * u(rng), 2.0 + 3.0 * u(rng));
+        const RayBeam seen(b, o, medium);
+        const int n = 1 + beams % 13;
+        w.clear(), s_max.clear();
+        for (int r = 0; r < n; ++r) {
+            glm::dvec3 d = glm::normalize(glm::dvec3(0.4 * u(rng), 0.4 * u(rng), 1.0 + 2.0 * u(rng)) - o);
+            if (r == 3) {   // parallel to the beam's slab
+                d -= glm::dot(d, b.n) * b.n;
+                d = glm::length(d) > 1e-9 ? glm::normalize(d) : glm::normalize(glm::cross(b.n, glm::dvec3(1, 0, 0)));
+                ++parallel;
+            }
+            w.push_back(d);
+            s_max.push_back(r % 3 == 0 ? 1e30 : 6.0 * (u(rng) + 1.0));
+        }
+        const int samples = 1 + beams % 4;
+        lanes.assign(static_cast<std::size_t>(n), -1.0);
+        BeamCounters c_lanes, c_one;
+        seen.radiance_lanes(w.data(), s_max.data(), n, samples, c_lanes, 0.01, lanes.data());
+        for (int r = 0; r < n; ++r) {
+            const double one = seen.radiance(w[r], s_max[r], samples, c_one, 0.01);
+            ASSERT_EQ(std::memcmp(&one, &lanes[r], sizeof one), 0) << "beam " << beams << " ray " << r << ": " << one << " vs " << lanes[r];
+            nonzero += one != 0.0;
+            ++rays;
+        }
+        EXPECT_EQ(c_lanes.clamped, c_one.clamped);
+        clamped += c_one.clamped;
+    }
+    std::printf("%d rays against %d beams (%d past a focus, %d rays parallel to the slab): %d non-zero, %lld clamped; "
+                "lanes in use: %s\n",
+                rays, beams, flipped, parallel, nonzero, clamped, RayBeam::lanes_available() ? "yes" : "no (one ray at a time)");
+    EXPECT_GT(nonzero, rays / 4);
+    EXPECT_GT(flipped, 10);
+    EXPECT_GT(clamped, 0);
 }
