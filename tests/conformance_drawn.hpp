@@ -9,6 +9,7 @@
 // number of cases (default 12). Beside each scene the case carries the regime quantities the claims are
 // stated in, computed here from the closed-form surface with its own 2-D Snell refraction, independently
 // of the methods and of harness/blocks/regime (which works on the sampled height field).
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -30,20 +31,28 @@ inline std::uint64_t conformance_seed() {
     return s && *s ? std::strtoull(s, nullptr, 10) : kDefaultConformanceSeed;
 }
 
-// CAUSTICS_CONFORMANCE_ONLY: a comma-separated list of case indices to judge instead of the first N (to
-// replay or re-measure some cases of a draw); empty when unset.
-inline std::vector<int> conformance_only_cases() {
-    std::vector<int> out;
+// CAUSTICS_CONFORMANCE_ONLY: a comma-separated list of case indices (0 to 100000) to judge instead of the
+// first N, to replay or re-measure some cases of a draw. Empty when unset; false (with `error` naming the
+// token) when a token is not such an index.
+inline bool conformance_only_cases(std::vector<int>& out, std::string& error) {
+    out.clear();
     const char* s = std::getenv("CAUSTICS_CONFORMANCE_ONLY");
-    if (!s) return out;
-    for (const char* p = s; *p;) {
+    if (!s || !*s) return true;
+    const std::string all(s);
+    std::size_t begin = 0;
+    while (begin <= all.size()) {
+        const std::size_t comma = std::min(all.find(',', begin), all.size());
+        const std::string token = all.substr(begin, comma - begin);
         char* end = nullptr;
-        const long v = std::strtol(p, &end, 10);
-        if (end == p) break;
-        if (v >= 0 && v <= 100000) out.push_back(static_cast<int>(v));
-        p = *end == ',' ? end + 1 : end;
+        const long v = token.empty() ? -1 : std::strtol(token.c_str(), &end, 10);
+        if (token.empty() || *end != '\0' || v < 0 || v > 100000) {
+            error = "CAUSTICS_CONFORMANCE_ONLY=" + all + ": '" + token + "' is not a case index (0 to 100000, comma-separated)";
+            return false;
+        }
+        out.push_back(static_cast<int>(v));
+        begin = comma + 1;
     }
-    return out;
+    return true;
 }
 
 inline int conformance_case_count() {

@@ -141,7 +141,9 @@ TEST_P(ConformanceDrawn, MeetsItsClaimOnDrawnHardCases) {
     std::vector<JudgedRow> rows;
     std::vector<DrawnCase> cases;
     double render_s = 0.0;
-    std::vector<int> indices = test_support::conformance_only_cases();
+    std::vector<int> indices;
+    std::string only_error;
+    ASSERT_TRUE(test_support::conformance_only_cases(indices, only_error)) << only_error;
     const bool subset = !indices.empty();
     if (!subset)
         for (int i = 0; i < count; ++i) indices.push_back(i);

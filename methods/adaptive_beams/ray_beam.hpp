@@ -38,6 +38,10 @@ public:
     static bool lanes_available();
 
 private:
+    // radiance_lanes' AVX2 body (called only where lanes_available()).
+    void radiance_avx2(const glm::dvec3* w, const double* s_max, int n, int samples, BeamCounters& counters,
+                       double s_min, double* out) const;
+
     glm::dvec3 n_, e1_, e2_;
     double yo_ = 0.0, y0_ = 0.0, y1_ = 0.0;
     double f0_[3]{}, k1_[3]{}, G_[3]{};   // f0_k; f1_k's part over yw; f2_k's part over yw^2

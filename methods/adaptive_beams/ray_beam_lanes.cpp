@@ -22,25 +22,25 @@ namespace caustics::adaptive_beams {
 #ifdef CAUSTICS_RAY_LANES
 namespace {
 
-#define AVX2 __attribute__((target("avx2")))
+#define CAUSTICS_LANES __attribute__((target("avx2")))
 
 // std::max(a, b) = a < b ? b : a and std::min(a, b) = b < a ? b : a, NaNs and signed zeros included:
 // _mm256_max_pd(x, y) is x > y ? x : y.
-AVX2 inline __m256d max_of(__m256d a, __m256d b) { return _mm256_max_pd(b, a); }
-AVX2 inline __m256d min_of(__m256d a, __m256d b) { return _mm256_min_pd(b, a); }
-AVX2 inline __m256d abs_of(__m256d v) { return _mm256_andnot_pd(_mm256_set1_pd(-0.0), v); }
-AVX2 inline __m256d select(__m256d mask, __m256d yes, __m256d no) { return _mm256_blendv_pd(no, yes, mask); }
-AVX2 inline __m256d lt(__m256d a, __m256d b) { return _mm256_cmp_pd(a, b, _CMP_LT_OQ); }
-AVX2 inline __m256d le(__m256d a, __m256d b) { return _mm256_cmp_pd(a, b, _CMP_LE_OQ); }
-AVX2 inline __m256d gt(__m256d a, __m256d b) { return _mm256_cmp_pd(a, b, _CMP_GT_OQ); }
-AVX2 inline __m256d ge(__m256d a, __m256d b) { return _mm256_cmp_pd(a, b, _CMP_GE_OQ); }
-AVX2 inline __m256d ne(__m256d a, __m256d b) { return _mm256_cmp_pd(a, b, _CMP_NEQ_UQ); }
-AVX2 inline __m256d eq(__m256d a, __m256d b) { return _mm256_cmp_pd(a, b, _CMP_EQ_OQ); }
-AVX2 inline __m256d splat(double v) { return _mm256_set1_pd(v); }
-AVX2 inline __m256d negate(__m256d v) { return _mm256_xor_pd(v, _mm256_set1_pd(-0.0)); }
+CAUSTICS_LANES inline __m256d max_of(__m256d a, __m256d b) { return _mm256_max_pd(b, a); }
+CAUSTICS_LANES inline __m256d min_of(__m256d a, __m256d b) { return _mm256_min_pd(b, a); }
+CAUSTICS_LANES inline __m256d abs_of(__m256d v) { return _mm256_andnot_pd(_mm256_set1_pd(-0.0), v); }
+CAUSTICS_LANES inline __m256d select(__m256d mask, __m256d yes, __m256d no) { return _mm256_blendv_pd(no, yes, mask); }
+CAUSTICS_LANES inline __m256d lt(__m256d a, __m256d b) { return _mm256_cmp_pd(a, b, _CMP_LT_OQ); }
+CAUSTICS_LANES inline __m256d le(__m256d a, __m256d b) { return _mm256_cmp_pd(a, b, _CMP_LE_OQ); }
+CAUSTICS_LANES inline __m256d gt(__m256d a, __m256d b) { return _mm256_cmp_pd(a, b, _CMP_GT_OQ); }
+CAUSTICS_LANES inline __m256d ge(__m256d a, __m256d b) { return _mm256_cmp_pd(a, b, _CMP_GE_OQ); }
+CAUSTICS_LANES inline __m256d ne(__m256d a, __m256d b) { return _mm256_cmp_pd(a, b, _CMP_NEQ_UQ); }
+CAUSTICS_LANES inline __m256d eq(__m256d a, __m256d b) { return _mm256_cmp_pd(a, b, _CMP_EQ_OQ); }
+CAUSTICS_LANES inline __m256d splat(double v) { return _mm256_set1_pd(v); }
+CAUSTICS_LANES inline __m256d negate(__m256d v) { return _mm256_xor_pd(v, _mm256_set1_pd(-0.0)); }
 
 // Both roots of a + b s + c s^2 as real_roots (beam.hpp) finds them, NaN where it finds none.
-AVX2 inline void roots_lanes(__m256d a, __m256d b, __m256d c, __m256d& r0, __m256d& r1) {
+CAUSTICS_LANES inline void roots_lanes(__m256d a, __m256d b, __m256d c, __m256d& r0, __m256d& r1) {
     const __m256d nan = splat(std::nan("")), zero = _mm256_setzero_pd();
     const __m256d scale = max_of(max_of(abs_of(a), abs_of(b)), abs_of(c));
     const __m256d none = eq(scale, zero);
@@ -63,8 +63,8 @@ AVX2 inline void roots_lanes(__m256d a, __m256d b, __m256d c, __m256d& r0, __m25
 
 }  // namespace
 
-AVX2 void RayBeam::radiance_lanes(const glm::dvec3* w, const double* s_max, int n, int samples, BeamCounters& counters,
-                                  double s_min, double* out) const {
+CAUSTICS_LANES void RayBeam::radiance_avx2(const glm::dvec3* w, const double* s_max, int n, int samples,
+                                            BeamCounters& counters, double s_min, double* out) const {
     const GaussRule& gq = gauss_rule(samples);
     const __m256d zero = _mm256_setzero_pd();
     // The pending quadrature nodes (up to four), with their rays' data.
@@ -72,7 +72,7 @@ AVX2 void RayBeam::radiance_lanes(const glm::dvec3* w, const double* s_max, int 
     int pray[4], pending = 0;
     const __m256d vys[3] = {splat(ys_[0]), splat(ys_[1]), splat(ys_[2])}, vye[3] = {splat(ye_[0]), splat(ye_[1]), splat(ye_[2])};
     const __m256d vw[3] = {splat(w_[0]), splat(w_[1]), splat(w_[2])};
-    auto flush = [&]() AVX2 {
+    auto flush = [&]() CAUSTICS_LANES {
         for (int l = pending; l < 4; ++l) {   // idle lanes: a harmless copy of lane 0, dropped below
             ps[l] = ps[0], pwt[l] = pwt[0], pyw[l] = pyw[0], pwx[l] = pwx[0], pwy[l] = pwy[0], pwz[l] = pwz[0];
             for (int k = 0; k < 3; ++k) pf1[k][l] = pf1[k][0], pf2[k][l] = pf2[k][0];
@@ -87,7 +87,7 @@ AVX2 void RayBeam::radiance_lanes(const glm::dvec3* w, const double* s_max, int 
         const __m256d inv = _mm256_div_pd(splat(1.0), select(nonzero, a2, splat(1.0)));
         const __m256d b0 = _mm256_mul_pd(F[0], inv), b1 = _mm256_mul_pd(F[1], inv);
         const __m256d b2 = _mm256_sub_pd(_mm256_sub_pd(splat(1.0), b0), b1);
-        auto mix = [&](const __m256d* v) AVX2 {
+        auto mix = [&](const __m256d* v) CAUSTICS_LANES {
             return _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(b0, v[0]), _mm256_mul_pd(b1, v[1])), _mm256_mul_pd(b2, v[2]));
         };
         const __m256d ys = mix(vys), ye = mix(vye), weight = mix(vw);
@@ -132,13 +132,13 @@ AVX2 void RayBeam::radiance_lanes(const glm::dvec3* w, const double* s_max, int 
             wx[l] = w[j].x, wy[l] = w[j].y, wz[l] = w[j].z, smax[l] = s_max[j];
         }
         const __m256d vx = _mm256_load_pd(wx), vy = _mm256_load_pd(wy), vz = _mm256_load_pd(wz);
-        auto dot3 = [&](const glm::dvec3& c) AVX2 {
+        auto dot3 = [&](const glm::dvec3& c) CAUSTICS_LANES {
             return _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(vx, splat(c.x)), _mm256_mul_pd(vy, splat(c.y))),
                                  _mm256_mul_pd(vz, splat(c.z)));
         };
         const __m256d yw = dot3(n_), qx = dot3(e1_), qy = dot3(e2_);
         // The slab [y0, y1] bounds s, or for a ray parallel to it the hull's bounding sphere.
-        const __m256d parallel = le(abs_of(yw), splat(1e-12));
+        const __m256d parallel = _mm256_cmp_pd(abs_of(yw), splat(1e-12), _CMP_NGT_UQ);   // !(|yw| > 1e-12), as radiance
         const __m256d sa = _mm256_div_pd(splat(y0_ - yo_), yw), sb = _mm256_div_pd(splat(y1_ - yo_), yw);
         const __m256d vmin = splat(s_min), vmax = _mm256_load_pd(smax);
         const __m256d lo1 = max_of(vmin, min_of(sa, sb)), hi1 = min_of(vmax, max_of(sa, sb));
@@ -211,17 +211,25 @@ AVX2 void RayBeam::radiance_lanes(const glm::dvec3* w, const double* s_max, int 
     if (pending > 0) flush();
 }
 
+#undef CAUSTICS_LANES
+
 bool RayBeam::lanes_available() { return cpu_has_avx2(); }
 
 #else
 
-void RayBeam::radiance_lanes(const glm::dvec3* w, const double* s_max, int n, int samples, BeamCounters& counters,
-                             double s_min, double* out) const {
-    for (int j = 0; j < n; ++j) out[j] = radiance(w[j], s_max[j], samples, counters, s_min);
-}
-
 bool RayBeam::lanes_available() { return false; }
 
 #endif
+
+void RayBeam::radiance_lanes(const glm::dvec3* w, const double* s_max, int n, int samples, BeamCounters& counters,
+                             double s_min, double* out) const {
+#ifdef CAUSTICS_RAY_LANES
+    if (lanes_available()) {
+        radiance_avx2(w, s_max, n, samples, counters, s_min, out);
+        return;
+    }
+#endif
+    for (int j = 0; j < n; ++j) out[j] = radiance(w[j], s_max[j], samples, counters, s_min);
+}
 
 }  // namespace caustics::adaptive_beams

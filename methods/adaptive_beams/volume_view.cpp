@@ -43,7 +43,7 @@ void evaluate(const Pass& pass, const std::vector<VolumeBeam>& beams, const Came
     const int W = g.width, H = g.height;
     const int bands = (H + kBandRows - 1) / kBandRows;
     const int samples = settings.samples;
-    const bool lanes = settings.lanes && RayBeam::lanes_available();
+    const bool lanes = settings.lanes;
     std::vector<VolumeStats> per_band(static_cast<std::size_t>(bands));
     tbb::parallel_for(tbb::blocked_range<int>(0, bands, 1), [&](const tbb::blocked_range<int>& br) {
         for (int band = br.begin(); band != br.end(); ++band) {
@@ -72,21 +72,21 @@ void evaluate(const Pass& pass, const std::vector<VolumeBeam>& beams, const Came
                             while (end != cols.end() && *end <= spans[k][1] &&
                                    pass.first[g.index(*end, y)] == pass.first[g.index(*(end - 1), y)] + pass.per_pixel)
                                 ++end;
-                            const auto r0 = static_cast<std::size_t>(pass.first[g.index(*it, y)]);
+                            const auto first_ray = static_cast<std::size_t>(pass.first[g.index(*it, y)]);
                             const int pixels = static_cast<int>(end - it), rays = pixels * pass.per_pixel;
                             values.resize(static_cast<std::size_t>(rays));
                             if (lanes)
-                                vb.beam->radiance_lanes(&pass.dir[r0], &pass.s_max[r0], rays, samples, counters,
+                                vb.beam->radiance_lanes(&pass.dir[first_ray], &pass.s_max[first_ray], rays, samples, counters,
                                                         kVolumeNearDistance, values.data());
                             else
                                 for (int q = 0; q < rays; ++q)
                                     values[static_cast<std::size_t>(q)] =
-                                        vb.beam->radiance(pass.dir[r0 + static_cast<std::size_t>(q)],
-                                                          pass.s_max[r0 + static_cast<std::size_t>(q)], samples, counters,
+                                        vb.beam->radiance(pass.dir[first_ray + static_cast<std::size_t>(q)],
+                                                          pass.s_max[first_ray + static_cast<std::size_t>(q)], samples, counters,
                                                           kVolumeNearDistance);
                             for (int p = 0; p < pixels; ++p, ++it) {
                                 const std::size_t i = g.index(*it, y);
-                                const std::size_t r = r0 + static_cast<std::size_t>(p * pass.per_pixel);
+                                const std::size_t r = first_ray + static_cast<std::size_t>(p * pass.per_pixel);
                                 double sum = 0.0;
                                 for (int q = 0; q < pass.per_pixel; ++q) {
                                     const double v = values[static_cast<std::size_t>(p * pass.per_pixel + q)];

@@ -397,6 +397,25 @@ TEST(AdaptiveBeams, VolumeViewOnItsOwnCoarserBeams) {
     EXPECT_TRUE(all_finite(coarse.out.camera_volume));
 }
 
+// The volume view with its integrals in AVX2 lanes (the default) and one ray at a time: the same image to the
+// bit, with the same counters, over the node and refined-pixel passes on sphere_fog and pool_murky, and the
+// edge pass on sphere_fog (edge rays 4 x 4 where 2 x 2 disagree: the per-ray values the edge test reads).
+TEST(AdaptiveBeams, VolumeViewTheSameWithAndWithoutLanes) {
+    for (const char* name : {"sphere_fog", "pool_murky"}) {
+        const Scene scene = small_view(name, 16);
+        const std::map<std::string, std::string> edge = {{"volume_refine", "0.25"}, {"volume_edge_subpixels", "4"}};
+        std::map<std::string, std::string> one = edge;
+        one["volume_lanes"] = "false";
+        const Rendered lanes = render(scene, edge, 16), single = render(scene, one, 16);
+        EXPECT_EQ(lanes.out.camera_volume.pixels, single.out.camera_volume.pixels) << name;
+        for (const char* counter : {"volume_rays", "volume_refined", "volume_edge_pixels", "clamped"})
+            EXPECT_EQ(lanes.out.health.get(counter), single.out.health.get(counter)) << name << ": " << counter;
+        // sphere_fog's light cone has edges in view, where the edge pass runs (pool_murky's 64 x 48 view has none).
+        if (std::string(name) == "sphere_fog") EXPECT_GT(lanes.out.health.get("volume_edge_pixels"), 0);
+        EXPECT_GT(lanes.out.health.get("volume_rays"), 1000) << name;
+    }
+}
+
 // Against the reference's camera_volume (single scattering towards the pinhole) on the two volume scenes
 // at 64 x 48 pixels (2e6 photons): the net error (run/net_error.hpp: the mean squared difference less the
 // reference's own variance) is below the best constant's (the mean of the reference: the no-caustic
