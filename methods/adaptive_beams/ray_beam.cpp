@@ -64,14 +64,7 @@ double RayBeam::radiance(const glm::dvec3& w, double s_max, int samples, BeamCou
     // A(y(s)) has a root inside the slab only where the beam passes a focus.
     if (flipped_) real_roots(f0_[0] + f0_[1] + f0_[2], f1[0] + f1[1] + f1[2], f2[0] + f2[1] + f2[2], cand, nc);
     int kept = 1;
-    for (int k = 1; k < nc; ++k)
-        if (cand[k] > s_lo && cand[k] < s_hi) {
-            // Insertion into the sorted list cand[1 .. kept).
-            const double v = cand[k];
-            int m = kept++;
-            while (m > 1 && cand[m - 1] > v) cand[m] = cand[m - 1], --m;
-            cand[m] = v;
-        }
+    for (int k = 1; k < nc; ++k) insert_interval_end(cand[k], s_lo, s_hi, cand, kept);
     nc = kept;
     cand[nc++] = s_hi;
     const GaussRule& gq = gauss_rule(samples);
@@ -88,9 +81,7 @@ double RayBeam::radiance(const glm::dvec3& w, double s_max, int samples, BeamCou
         {
             double F[3];
             const double a2 = edges(mid, F);
-            const bool inside = a2 > 0.0 ? (F[0] >= 0.0 && F[1] >= 0.0 && F[2] >= 0.0)
-                                         : a2 < 0.0 && (F[0] <= 0.0 && F[1] <= 0.0 && F[2] <= 0.0);
-            if (!inside) continue;
+            if (!inside_section(F, a2)) continue;
         }
         for (int i = 0; i < gq.n; ++i) {
             const double s = mid + half * gq.x[i];

@@ -21,6 +21,22 @@
 
 namespace caustics::adaptive_beams {
 
+// The ends of a ray's sub-intervals in the slab, cand[0] = s_lo, then the crossing roots kept sorted in
+// cand[1 .. kept): a root v joins them where it lies strictly inside (s_lo, s_hi) (NaN, no root, never does).
+// RayBeam::radiance and its lanes share it; cand may hold v itself at an index >= kept.
+inline void insert_interval_end(double v, double s_lo, double s_hi, double* cand, int& kept) {
+    if (!(v > s_lo && v < s_hi)) return;
+    int m = kept++;
+    while (m > 1 && cand[m - 1] > v) cand[m] = cand[m - 1], --m;
+    cand[m] = v;
+}
+
+// Whether the point whose edge functions are F (their sum a2 = 2 A) lies in the cross-section: every F_k has
+// the sign of A (or is zero).
+inline bool inside_section(const double F[3], double a2) {
+    return a2 > 0.0 ? (F[0] >= 0.0 && F[1] >= 0.0 && F[2] >= 0.0) : a2 < 0.0 && (F[0] <= 0.0 && F[1] <= 0.0 && F[2] <= 0.0);
+}
+
 class RayBeam {
 public:
     // The beam seen from o; `medium` is the medium both the beam and the camera are in.
@@ -36,6 +52,9 @@ public:
     void radiance_lanes(const glm::dvec3* w, const double* s_max, int n, int samples, BeamCounters& counters,
                         double s_min, double* out) const;
     static bool lanes_available();
+    // The same, one ray at a time (where the CPU lacks AVX2, and for timing comparisons).
+    void radiance_each(const glm::dvec3* w, const double* s_max, int n, int samples, BeamCounters& counters,
+                       double s_min, double* out) const;
 
 private:
     // radiance_lanes' AVX2 body (called only where lanes_available()).

@@ -179,13 +179,7 @@ CAUSTICS_LANES void RayBeam::radiance_avx2(const glm::dvec3* w, const double* s_
             double cand[10];
             int nc = 1;
             cand[0] = s_lo;
-            for (int r = 0; r < nroots; ++r) {
-                const double v = roots[r][l];
-                if (!(v > s_lo && v < s_hi)) continue;
-                int m = nc++;
-                while (m > 1 && cand[m - 1] > v) cand[m] = cand[m - 1], --m;
-                cand[m] = v;
-            }
+            for (int r = 0; r < nroots; ++r) insert_interval_end(roots[r][l], s_lo, s_hi, cand, nc);
             cand[nc++] = s_hi;
             for (int k = 0; k + 1 < nc; ++k) {
                 const double a = cand[k], b = cand[k + 1];
@@ -193,10 +187,7 @@ CAUSTICS_LANES void RayBeam::radiance_avx2(const glm::dvec3* w, const double* s_
                 const double half = 0.5 * (b - a), mid = 0.5 * (a + b);
                 double F[3];
                 for (int e = 0; e < 3; ++e) F[e] = f0_[e] + mid * (f1[e][l] + mid * f2[e][l]);
-                const double a2 = F[0] + F[1] + F[2];
-                const bool inside = a2 > 0.0 ? (F[0] >= 0.0 && F[1] >= 0.0 && F[2] >= 0.0)
-                                             : a2 < 0.0 && (F[0] <= 0.0 && F[1] <= 0.0 && F[2] <= 0.0);
-                if (!inside) continue;
+                if (!inside_section(F, F[0] + F[1] + F[2])) continue;
                 for (int i = 0; i < gq.n; ++i) {
                     ps[pending] = mid + half * gq.x[i];
                     pwt[pending] = gq.w[i] * half;
@@ -229,6 +220,11 @@ void RayBeam::radiance_lanes(const glm::dvec3* w, const double* s_max, int n, in
         return;
     }
 #endif
+    radiance_each(w, s_max, n, samples, counters, s_min, out);
+}
+
+void RayBeam::radiance_each(const glm::dvec3* w, const double* s_max, int n, int samples, BeamCounters& counters,
+                            double s_min, double* out) const {
     for (int j = 0; j < n; ++j) out[j] = radiance(w[j], s_max[j], samples, counters, s_min);
 }
 

@@ -75,15 +75,12 @@ void evaluate(const Pass& pass, const std::vector<VolumeBeam>& beams, const Came
                             const auto first_ray = static_cast<std::size_t>(pass.first[g.index(*it, y)]);
                             const int pixels = static_cast<int>(end - it), rays = pixels * pass.per_pixel;
                             values.resize(static_cast<std::size_t>(rays));
+                            const glm::dvec3* dir = &pass.dir[first_ray];
+                            const double* s_max = &pass.s_max[first_ray];
                             if (lanes)
-                                vb.beam->radiance_lanes(&pass.dir[first_ray], &pass.s_max[first_ray], rays, samples, counters,
-                                                        kVolumeNearDistance, values.data());
+                                vb.beam->radiance_lanes(dir, s_max, rays, samples, counters, kVolumeNearDistance, values.data());
                             else
-                                for (int q = 0; q < rays; ++q)
-                                    values[static_cast<std::size_t>(q)] =
-                                        vb.beam->radiance(pass.dir[first_ray + static_cast<std::size_t>(q)],
-                                                          pass.s_max[first_ray + static_cast<std::size_t>(q)], samples, counters,
-                                                          kVolumeNearDistance);
+                                vb.beam->radiance_each(dir, s_max, rays, samples, counters, kVolumeNearDistance, values.data());
                             for (int p = 0; p < pixels; ++p, ++it) {
                                 const std::size_t i = g.index(*it, y);
                                 const std::size_t r = first_ray + static_cast<std::size_t>(p * pass.per_pixel);
