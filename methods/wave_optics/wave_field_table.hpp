@@ -86,6 +86,8 @@ public:
     const SurfaceSamples& resample(const HeightField& hf, double lx, double ly, ResamplePath path = ResamplePath::Auto) {
         return resample(hf, fft_window(hf, lx, ly), lx, ly, path);
     }
+    // The samples of the last resample().
+    const SurfaceSamples& samples() const { return surface_; }
 
     // Sizes the table for `slices` depths (contents undefined until the first sample assigns them).
     void begin(int slices);

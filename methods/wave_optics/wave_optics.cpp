@@ -483,7 +483,10 @@ CausticOutput WaveOpticsMethod::render(const FrameGeometry& frame, const RenderR
     if (lambda != lambda_) build_spectral(lambda);
     out.health.add("wavelength_um", std::llround(1e6 * lambda_));
     // 1. The surface on the FFT grid over the window (bordered if its edges do not match), mean level removed.
-    const SurfaceSamples& surface = table_->resample(hf, window, surface_lx_, surface_ly_);
+    // A bordered window was resampled into the table by update() (frame_stats, for the border's deviation),
+    // for this surface: those samples serve; a tiling surface's are taken here.
+    const SurfaceSamples& surface =
+        window.pad > 0.0 ? table_->samples() : table_->resample(hf, window, surface_lx_, surface_ly_);
     if (!window.periodic) out.health.add("nonperiodic_surface", 1);
     out.stages_ms.emplace_back("resample", lap());
 
