@@ -2,6 +2,7 @@
 // caustic_triangles' plugin class and the receiver chart its per-vertex passes use; the passes over the
 // surface grid (resampling, triangle flux, refraction, triangle values) are in surface_passes.cpp, the
 // rendering (dispersion samples, periodic textures, receiver and camera maps) in caustic_triangles.cpp.
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -60,14 +61,18 @@ struct ChartMap {
 const ObjectInstance* water_surface(const FrameGeometry& frame);
 
 // The claim (accuracy_claim): nrmse <= kClaimError at grid >= kClaimMinGrid while no crest shadows the
-// surface and the receiver lies at most kClaimMaxFocusFraction x the first focus depth down.
-constexpr double kClaimError = 0.10, kClaimMaxFocusFraction = 1.5;
-constexpr int kClaimMinGrid = 256;
+// surface and the receiver lies at most kClaimMaxFocusFraction x the first focus depth down; past the first
+// focus the grid the render uses there (fold_refine x grid) must be at least kClaimMinFoldGrid.
+constexpr double kClaimError = 0.07, kClaimMaxFocusFraction = 3.0;
+constexpr int kClaimMinGrid = 256, kClaimMinFoldGrid = 512;
+constexpr int kMaxGrid = 4096;   // the `grid` parameter's upper limit
 
 class CausticTriangles final : public Method {
 public:
     explicit CausticTriangles(const ParamSet& p)
-        : grid_(static_cast<int>(p.get_int("grid"))),
+        : base_grid_(static_cast<int>(p.get_int("grid"))),
+          fold_refine_(static_cast<int>(p.get_int("fold_refine"))),
+          grid_(base_grid_),
           dispersion_samples_(static_cast<int>(p.get_int("dispersion_samples"))),
           absorption_(p.get_bool("absorption")),
           coverage_(p.get_enum("coverage") == "center" ? RasterCoverage::PixelCenter : RasterCoverage::Area) {}
@@ -83,6 +88,9 @@ private:
         std::int64_t lost = 0, folded = 0, not_converged = 0;
     };
     void ensure_topology();
+    // The grid the receiver is drawn at where the base grid's map folds: fold_refine x grid, at most the
+    // largest grid the `grid` parameter accepts.
+    int grid_past_focus() const { return std::min(base_grid_ * fold_refine_, std::max(base_grid_, kMaxGrid)); }
     void render_texture(const FrameGeometry& frame, const TextureRequest& request, CausticOutput& out);
     void resample_surface(const HeightField& hf);
     void compute_triangle_flux(const glm::dvec3& light_dir, double e0);
@@ -94,18 +102,23 @@ private:
     void triangle_values(const ChartMap& map, double scale, Counters& counters);
     // One pass per dispersion sample (one pass without dispersion): refract every vertex with that
     // sample's index, turn the triangles into flux values and rasterise them. `scalar` receives the
-    // samples' average, `rgb` their spectral sum (dispersion only); `periodic` wraps toroidally.
-    void draw_dispersion_samples(const FrameGeometry& frame, const ChartMap& map, int W, int H, double scale,
+    // samples' average, `rgb` their spectral sum (dispersion only); `periodic` wraps toroidally. With
+    // `stop_on_fold`, returns false before drawing anything when the first sample's map folds.
+    bool draw_dispersion_samples(const FrameGeometry& frame, const ChartMap& map, int W, int H, double scale,
                                  bool periodic, Image& scalar, Image& rgb, Counters& counters,
-                                 RasterStats& raster_stats, double& refract_ms, double& raster_ms);
+                                 RasterStats& raster_stats, double& refract_ms, double& raster_ms,
+                                 bool stop_on_fold = false);
 
-    int grid_;
+    int base_grid_;                        // the `grid` parameter
+    int fold_refine_;                      // the `fold_refine` parameter (1: none)
+    int grid_;                             // the grid of the pass being drawn
     int dispersion_samples_;
     bool absorption_;
     RasterCoverage coverage_;
 
     // Per-frame buffers, kept between renders (no allocation after the first frame of a given size).
-    std::vector<glm::uvec3> triangles_;    // the surface grid's triangles (fixed topology)
+    std::vector<glm::uvec3> triangles_;    // the surface grid's triangles (fixed topology at grid_)
+    std::vector<glm::uvec3> other_triangles_;   // the other grid's (base or fold), swapped in when it is drawn
     std::vector<double> xs_, ys_;          // world x of grid column i, y of row j
     std::vector<float> xr_;                // plane receiver: xs_ relative to the plane's origin
     std::vector<float> height_;            // resampled surface, grid x grid

@@ -22,6 +22,8 @@ using namespace caustics;
 
 namespace {
 
+constexpr double caustic_triangles_claim_error = 0.07;   // the claim inside its regime (README)
+
 const MethodInfo& info() { return require_method("caustic_triangles"); }
 
 CausticOutput render(const Scene& scene, const std::map<std::string, std::string>& overrides, int width,
@@ -68,7 +70,7 @@ void expect_uniform(const Image& img, double expected, double rel, int border = 
 TEST(CausticTriangles, RegisteredWithDocumentedParameters) {
     const MethodInfo& m = info();
     EXPECT_TRUE(m.radiometric);
-    for (const char* name : {"grid", "iterations", "dispersion_samples", "absorption", "coverage"}) {
+    for (const char* name : {"grid", "fold_refine", "iterations", "dispersion_samples", "absorption", "coverage"}) {
         bool found = false;
         for (const ParamSpec& p : m.params)
             if (p.name == name) {
@@ -308,9 +310,67 @@ TEST(CausticTriangles, ClaimsUpToTheShadowingBound) {
         const AccuracyClaim claim = m->accuracy_claim(frame);
         EXPECT_EQ(claim.inside, inside) << name << ": " << claim.reason;
         if (inside) {
-            EXPECT_DOUBLE_EQ(claim.max_error, 0.10);   // default grid 256
+            EXPECT_DOUBLE_EQ(claim.max_error, caustic_triangles_claim_error);
         } else {
             EXPECT_NE(claim.reason.find("shadow"), std::string::npos) << claim.reason;
         }
     }
+}
+
+// Past the first focus (sine_deep: the grid-256 map folds) the receiver is drawn at twice the grid, exactly as
+// a render at that grid would draw it; before it (sine) nothing changes. The same instance alternates
+// between the two grids' topologies.
+TEST(CausticTriangles, DrawsPastTheFocusAtTheFoldGrid) {
+    const Scene deep = load_scene(std::string(CAUSTICS_SOURCE_DIR) + "/scenes/sine_deep.json");
+    const CausticOutput regridded = render(deep, {}, 256, 256);
+    EXPECT_EQ(regridded.health.get("drawn_refined"), 1);
+    EXPECT_GT(regridded.health.get("folded_triangles"), 0);
+    const CausticOutput at512 = render(deep, {{"grid", "512"}, {"fold_refine", "1"}}, 256, 256);
+    const CausticOutput at256 = render(deep, {{"fold_refine", "1"}}, 256, 256);
+    EXPECT_EQ(at256.health.get("drawn_refined"), 0);
+    EXPECT_EQ(regridded.receiver.pixels, at512.receiver.pixels);
+    EXPECT_NE(regridded.receiver.pixels, at256.receiver.pixels);
+    EXPECT_EQ(regridded.health.get("folded_triangles"), at512.health.get("folded_triangles"));
+
+    // One instance, three frames: probe at 256, draw at 512, and again.
+    const FrameGeometry frame = build_frame_geometry(deep, 0);
+    const ReceiverChart chart(frame, 256, 256);
+    std::unique_ptr<Method> m = info().create(ParamSet::resolve(info().name, info().params, {}));
+    m->prepare(deep);
+    m->update(frame);
+    RenderRequest request;
+    request.receiver = &chart;
+    for (int i = 0; i < 3; ++i) EXPECT_EQ(m->render(frame, request).receiver.pixels, at512.receiver.pixels) << i;
+
+    const Scene before = load_scene(std::string(CAUSTICS_SOURCE_DIR) + "/scenes/sine.json");
+    const CausticOutput plain = render(before, {}, 256, 256);
+    EXPECT_EQ(plain.health.get("drawn_refined"), 0);
+    EXPECT_EQ(plain.receiver.pixels, render(before, {{"fold_refine", "1"}}, 256, 256).receiver.pixels);
+}
+
+// Past the first focus the claim holds only where the receiver is drawn at grid 512 or finer there
+// (fold_refine x grid).
+TEST(CausticTriangles, ClaimsPastTheFocusOnlyAtTheFoldGrid) {
+    const Scene deep = load_scene(std::string(CAUSTICS_SOURCE_DIR) + "/scenes/sine_deep.json");
+    const FrameGeometry frame = build_frame_geometry(deep, 0);
+    auto claim_with = [&](const std::map<std::string, std::string>& overrides) {
+        std::unique_ptr<Method> m = info().create(ParamSet::resolve(info().name, info().params, overrides));
+        m->prepare(deep);
+        m->update(frame);
+        return m->accuracy_claim(frame);
+    };
+    const AccuracyClaim by_default = claim_with({});
+    EXPECT_TRUE(by_default.inside) << by_default.reason;
+    EXPECT_DOUBLE_EQ(by_default.max_error, caustic_triangles_claim_error);
+    const AccuracyClaim unrefined = claim_with({{"fold_refine", "1"}});
+    EXPECT_FALSE(unrefined.inside);
+    EXPECT_NE(unrefined.reason.find("fold_refine"), std::string::npos) << unrefined.reason;
+    EXPECT_TRUE(claim_with({{"grid", "512"}, {"fold_refine", "1"}}).inside);
+    // Before the focus the fold grid is not needed.
+    const Scene before = load_scene(std::string(CAUSTICS_SOURCE_DIR) + "/scenes/sine.json");
+    const FrameGeometry f2 = build_frame_geometry(before, 0);
+    std::unique_ptr<Method> m = info().create(ParamSet::resolve(info().name, info().params, {{"fold_refine", "1"}}));
+    m->prepare(before);
+    m->update(f2);
+    EXPECT_TRUE(m->accuracy_claim(f2).inside);
 }
