@@ -191,7 +191,7 @@ MethodInfo method_info() {
         {"deviation", ParamType::Float, "0.01", 0.0, 1e6, {},
          "split where the light's hit at a cell's edge midpoint or centre lies further than this x the cell's "
          "extent where its beam ends from where the bilinear beam puts it (the ray map bends; on `sphere` 0.05 "
-         "halved the error of 0.2 for 7 % more beams; 0.01 keeps drawn sine cases within 0.10 up to 0.8 of the "
+         "halved the error of 0.2 for 7 % more beams; 0.01 keeps drawn sine cases within 0.10 up to 0.7 of the "
          "way to the first focus, where 0.05 reaches 0.12 at 0.6 of the way)"},
         {"fold_split", ParamType::Bool, "true", 0, 0, {},
          "split cells one of whose beams passes a focus (its cross-section's area changes sign) before it ends: past "

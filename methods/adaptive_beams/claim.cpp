@@ -10,9 +10,9 @@ namespace caustics::adaptive_beams {
 
 namespace {
 // The regimes measured on drawn cases (README.md "Regime of validity and claim"): with the split oracle's
-// deviation test at 1 % (the default), a finest grid of 128 keeps the receiver within 0.10 up to 0.8 of the
-// way to the first focus (worst 0.072 over 800 cases of four seeds; between 0.8 and 1.0 of the way 3 of 65
-// exceeded it, up to 0.115); a finest grid of 256 that also splits the cells whose beams pass a focus keeps it
+// deviation test at 1 % (the default), a finest grid of 128 keeps the receiver within 0.10 up to 0.7 of the
+// way to the first focus (worst 0.066 over 1,200 cases of six seeds; between 0.7 and 0.8 of the way 0.090, at
+// 0.75, and between 0.8 and 1.0 3 of 65 exceeded 0.10, up to 0.115); a finest grid of 256 that also splits the cells whose beams pass a focus keeps it
 // there up to 1.2 x the first focus (worst 0.064 over 600 cases of three seeds; from 1.2 to 1.5 x two cases
 // reached 0.105 and 0.129), where the folds of the ray map lie between the water and the receiver; a finest
 // adaptive grid of 512 with fold_split keeps it there up to 6 x the first focus, the deepest drawn (worst 0.084 over
@@ -25,7 +25,7 @@ constexpr double kMinFinestGrid = 128, kFoldFinestGrid = 256, kDeepFoldFinestGri
 // could let the oracle miss what the first level does not resolve, and without a refinement level
 // fold_split has nothing to send down.
 constexpr int kDeepFoldMinGrid = 16;
-constexpr double kFocusFine = 0.8, kFocusFolds = 1.2, kFocusDeepFolds = 6.0, kFocusCoarse = 0.4;
+constexpr double kFocusFine = 0.7, kFocusFolds = 1.2, kFocusDeepFolds = 6.0, kFocusCoarse = 0.4;
 }  // namespace
 
 Capability supports(const Scene& scene) {
@@ -72,7 +72,7 @@ AccuracyClaim claim_for(const FrameGeometry& frame, const GridSettings& s) {
             return "no height-field water interface: solid refractors are not claimed (ball_lens, whose beams fold into "
                    "its ring caustic)";
         const char* further = focus_limit == kFocusCoarse
-                                  ? " (a deviation of at most 0.01 claims up to 0.8 of the way)"
+                                  ? " (a deviation of at most 0.01 claims up to 0.7 of the way)"
                                   : focus_limit == kFocusFine
                                         ? " (1.2 x needs a finest grid of 256 with fold_split, or a uniform grid of 256; "
                                           "6 x a finest adaptive grid of 512 from a grid of at least 16, with fold_split)"

@@ -27,9 +27,9 @@ AccuracyClaim claim_for(const FrameGeometry& frame, const Settings& s) {
     // keep the default bound, checked on the ball lens's closed form.
     const regime::WaterRegime w = regime::water_regime(frame);
     if (!w.valid) return AccuracyClaim::within(kDefaultClaimError);
-    // Two regimes. Before 0.9 x the first focus, nrmse 0.05 from grid 64. Past it, the folds of the ray map
+    // Two regimes. Before 0.8 x the first focus, nrmse 0.05 from grid 64. Past it, the folds of the ray map
     // need the surface sampled finely and the map's texels well inside a bin (README.md "Past the first
-    // focus"): settings that do both are held to 0.10 from 1.1 to 6 x the focus; other settings stay at 0.9.
+    // focus"): settings that do both are held to 0.10 from 1.1 to 6 x the focus; other settings stay at 0.8.
     const double map_per_grid = static_cast<double>(s.map) / std::max(1, s.grid);
     const bool fold_settings = s.grid >= kFoldMinGrid && std::abs(map_per_grid - kFoldMapPerGrid) < 1e-9 &&
                                s.elliptic && s.bilinear && s.estimator.kind == EstimatorKind::Newton;
