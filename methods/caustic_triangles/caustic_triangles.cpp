@@ -349,8 +349,7 @@ MethodInfo caustic_triangles_info() {
          "surface grid resolution (vertices per side) the water surface is resampled at", {"64", "128", "256"}},
         {"fold_refine", ParamType::Int, "2", 1, 4, {},
          "where the `grid` map folds (a receiver past a focus), the receiver is drawn at fold_refine x grid (at most "
-         "4096); 1: `grid` throughout",
-         {"1", "2"}},
+         "4096); 1: `grid` throughout"},
         {"iterations", ParamType::Int, "1", 1, 1, {}, "no meaning for this single-pass method; only 1 is valid"},
         {"dispersion_samples", ParamType::Int, "8", 2, 64, {},
          "indices (wavelengths) rendered in [ior, ior+dispersion] when the material has dispersion"},
