@@ -116,10 +116,12 @@ bool cut_by_energy(Beam& b, double sigma_t, double cutoff) {
         return std::exp(-sigma_t * std::max(0.0, y - ystart) * stretch) * a_start /
                std::max(std::abs(b.area(y)), b.a_min);
     };
+    // The last of kSteps + 1 samples at or above the cutoff, searched from the end: most beams end above it,
+    // so one sample usually decides.
     constexpr int kSteps = 32;
     double last_above = b.y0;
     bool any = false;
-    for (int k = 0; k <= kSteps; ++k) {
+    for (int k = kSteps; k >= 0 && !any; --k) {
         const double y = b.y0 + (b.y1 - b.y0) * k / kSteps;
         if (density(y) >= cutoff) {
             last_above = y;

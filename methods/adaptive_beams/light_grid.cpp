@@ -162,23 +162,33 @@ double LightGrid::triangle_flux(const glm::dvec2& a, const glm::dvec2& b, const 
     return light.intensity * 2.0 * std::atan2(num, den);
 }
 
-// The traced points of the finest grid's lattice, each traced once.
-struct LightGrid::Lattice {
-    std::unordered_map<std::uint64_t, int> index;
-    std::vector<LightPath> paths;
-    const LightPath& at(int i, int j) const { return paths[static_cast<std::size_t>(index.at(key(i, j)))]; }
-};
+void LatticePoints::reset(int res) {
+    paths.clear();
+    hashed.clear();
+    const std::size_t n = static_cast<std::size_t>(res) + 1;
+    if (n * n <= kDenseLatticeLimit) {
+        side = static_cast<int>(n);
+        dense.assign(n * n, -1);
+    } else {
+        side = 0;
+        dense.clear();
+    }
+}
 
-// The beams of one triangle of lattice points (one per segment of their common path), what was dropped,
-// and what the oracle weighs.
-struct LightGrid::TriBeams {
-    std::vector<Beam> beams;
-    std::vector<std::uint8_t> ends;
-    std::vector<int> end_object;
-    std::int64_t tir = 0, energy = 0, degenerate = 0, lost = 0, flipped = 0;
-    double min_ratio = 1e300, max_view_angle = 0.0;
-    bool folded = false;   // a beam passes a focus before it ends
-};
+void LatticePoints::insert(int i, int j, int index) {
+    if (side > 0) dense[static_cast<std::size_t>(j) * side + static_cast<std::size_t>(i)] = index;
+    else hashed.emplace(key(i, j), index);
+}
+
+void TriangleBeams::clear() {
+    beams.clear();
+    ends.clear();
+    end_object.clear();
+    tir = energy = degenerate = lost = flipped = 0;
+    min_ratio = 1e300;
+    max_view_angle = 0.0;
+    folded = false;
+}
 
 // The beams of three light rays through lattice points c (one beam per segment of their path).
 void LightGrid::emit(const glm::dvec2 (&c)[3], const LightPath* const (&p)[3], TriBeams& tb) const {
@@ -294,8 +304,8 @@ void LightGrid::trace_points(Lattice& lattice, const std::vector<Cell>& cells, i
     for (const Cell& c : cells)
         for (int dj = 0; dj <= 2; dj += step)
             for (int di = 0; di <= 2; di += step) {
-                const std::uint64_t k = key(c.i + di * size / 2, c.j + dj * size / 2);
-                if (!lattice.index.count(k)) need.push_back(k);
+                const int i = c.i + di * size / 2, j = c.j + dj * size / 2;
+                if (lattice.find(i, j) < 0) need.push_back(key(i, j));
             }
     std::sort(need.begin(), need.end());
     need.erase(std::unique(need.begin(), need.end()), need.end());
@@ -305,7 +315,8 @@ void LightGrid::trace_points(Lattice& lattice, const std::vector<Cell>& cells, i
         for (std::size_t n = r.begin(); n != r.end(); ++n)
             lattice.paths[first + n] = trace(static_cast<int>(need[n] >> 32), static_cast<int>(need[n] & 0xffffffffu));
     });
-    for (std::size_t n = 0; n < need.size(); ++n) lattice.index.emplace(need[n], static_cast<int>(first + n));
+    for (std::size_t n = 0; n < need.size(); ++n)
+        lattice.insert(static_cast<int>(need[n] >> 32), static_cast<int>(need[n] & 0xffffffffu), static_cast<int>(first + n));
 }
 
 // The oracle (Sec. 4.2) on one cell of `size` lattice steps at refinement `level`: 0 drop (no light ray
@@ -364,7 +375,8 @@ std::uint8_t LightGrid::oracle(const Lattice& lattice, const Cell& c, int size, 
         // past the first focus a fold of the ray map lies inside them, and a beam's one density
         // smears its 1/sqrt peak over the whole section (drawn sine cases at 1-1.5 x the first
         // focus: 0.11 without this test at a finest grid of 256, 0.088 with it).
-        TriBeams tb;
+        thread_local TriBeams tb;   // reused: its vectors keep their capacity from cell to cell
+        tb.clear();
         const glm::ivec2 t0[3] = {q[0], q[1], q[2]}, t1[3] = {q[0], q[2], q[3]};
         make_triangle(lattice, t0, tb, false);
         make_triangle(lattice, t1, tb, false);
@@ -379,27 +391,41 @@ std::uint8_t LightGrid::oracle(const Lattice& lattice, const Cell& c, int size, 
 // corner, so that neighbouring beams share their edge rays and the beams tile the light without
 // cracks or overlaps (otherwise the bilinear sides of a coarse beam and of its finer neighbours part
 // where the ray map bends, and light is lost or counted twice).
-void LightGrid::leaf_beams(const Lattice& lattice, const std::vector<Cell>& leaves, int s0, BeamSet& out) const {
+void LightGrid::leaf_beams(const Lattice& lattice, const std::vector<Cell>& leaves, int s0, std::vector<TriBeams>& per,
+                           std::vector<std::uint8_t>& corner_marks, BeamSet& out) const {
     GridStats& st = out.stats;
+    // The leaves' corners: a dense table where the lattice's is dense, a hash set beyond.
+    const std::size_t side = static_cast<std::size_t>(lattice.side);
     std::unordered_map<std::uint64_t, char> corner;
+    if (side > 0) corner_marks.assign(side * side, 0);
     for (const Cell& c : leaves) {
         const int size = s0 >> c.level;
         for (int dj = 0; dj <= 1; ++dj)
-            for (int di = 0; di <= 1; ++di) corner.emplace(key(c.i + di * size, c.j + dj * size), 1);
+            for (int di = 0; di <= 1; ++di) {
+                const int i = c.i + di * size, j = c.j + dj * size;
+                if (side > 0) corner_marks[static_cast<std::size_t>(j) * side + static_cast<std::size_t>(i)] = 1;
+                else corner.emplace(key(i, j), 1);
+            }
     }
-    std::vector<TriBeams> per(leaves.size());
+    auto is_corner = [&](const glm::ivec2& v) {
+        return side > 0 ? corner_marks[static_cast<std::size_t>(v.y) * side + static_cast<std::size_t>(v.x)] != 0
+                        : corner.count(key(v.x, v.y)) != 0;
+    };
+    if (per.size() < leaves.size()) per.resize(leaves.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size(), 16), [&](const tbb::blocked_range<std::size_t>& r) {
+        thread_local std::vector<glm::ivec2> ring;
         for (std::size_t n = r.begin(); n != r.end(); ++n) {
             const Cell& c = leaves[n];
+            per[n].clear();
             const int size = s0 >> c.level;
             const glm::ivec2 q[4] = {{c.i, c.j}, {c.i + size, c.j}, {c.i + size, c.j + size}, {c.i, c.j + size}};
-            std::vector<glm::ivec2> ring;
+            ring.clear();
             for (int side = 0; side < 4; ++side) {
                 const glm::ivec2 a = q[side], b = q[(side + 1) % 4], step = (b - a) / size;
                 ring.push_back(a);
                 for (int t = 1; t < size; ++t) {
                     const glm::ivec2 v = a + t * step;
-                    if (corner.count(key(v.x, v.y))) ring.push_back(v);
+                    if (is_corner(v)) ring.push_back(v);
                 }
             }
             if (ring.size() == 4) {
@@ -417,11 +443,12 @@ void LightGrid::leaf_beams(const Lattice& lattice, const std::vector<Cell>& leav
     });
     st.cells = static_cast<std::int64_t>(leaves.size());
     std::size_t total = 0;
-    for (const TriBeams& tb : per) total += tb.beams.size();
+    for (std::size_t n = 0; n < leaves.size(); ++n) total += per[n].beams.size();
     out.beams.reserve(total);
     out.ends.reserve(total);
     out.end_object.reserve(total);
-    for (TriBeams& tb : per) {
+    for (std::size_t n = 0; n < leaves.size(); ++n) {
+        const TriBeams& tb = per[n];
         st.discarded_tir += tb.tir;
         st.discarded_energy += tb.energy;
         st.degenerate += tb.degenerate;
@@ -434,12 +461,13 @@ void LightGrid::leaf_beams(const Lattice& lattice, const std::vector<Cell>& leav
     st.beams_generated = static_cast<std::int64_t>(out.beams.size());
 }
 
-void LightGrid::generate(BeamSet& out) const {
+void LightGrid::generate(BeamSet& out, GridScratch& scratch) const {
     out.beams.clear();
     out.ends.clear();
     out.end_object.clear();
     out.stats = GridStats{};
-    Lattice lattice;
+    Lattice& lattice = scratch.lattice;
+    lattice.reset(res_);
     const int max_level = s_.adaptive ? s_.iterations : 0;
     const int s0 = res_ / s_.grid;
     std::vector<Cell> cells;
@@ -466,7 +494,7 @@ void LightGrid::generate(BeamSet& out) const {
         }
         cells.swap(next);
     }
-    leaf_beams(lattice, leaves, s0, out);
+    leaf_beams(lattice, leaves, s0, scratch.leaves, scratch.corner_marks, out);
 }
 
 }  // namespace caustics::adaptive_beams

@@ -11,8 +11,10 @@
 // leave the bilinear beam (Sec. 6), where its beam converges strongly for its share of the light,
 // where the beam is wide as seen from the camera, and where a beam passes a focus before it ends.
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <unordered_map>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -69,6 +71,46 @@ struct BeamSet {
     GridStats stats;
 };
 
+// The lattice points generate() traced, each once: a dense table of indices where the finest lattice is
+// small enough ((res + 1)^2 <= kDenseLatticeLimit), a hash map beyond.
+struct LatticePoints {
+    static constexpr std::size_t kDenseLatticeLimit = std::size_t{1} << 24;
+    int side = 0;                                  // res + 1 where dense, 0 where hashed
+    std::vector<int> dense;                        // side x side: index into paths, -1 not traced
+    std::unordered_map<std::uint64_t, int> hashed;
+    std::vector<LightPath> paths;
+    // Empty, for a lattice of res x res cells; the storage of the last frame is kept.
+    void reset(int res);
+    int find(int i, int j) const {
+        if (side > 0) return dense[static_cast<std::size_t>(j) * side + static_cast<std::size_t>(i)];
+        const auto it = hashed.find((static_cast<std::uint64_t>(i) << 32) | static_cast<std::uint32_t>(j));
+        return it == hashed.end() ? -1 : it->second;
+    }
+    const LightPath& at(int i, int j) const { return paths[static_cast<std::size_t>(find(i, j))]; }
+    void insert(int i, int j, int index);
+};
+
+// The beams of one triangle (or one leaf) of lattice points (one beam per segment of their common path),
+// what was dropped, and what the oracle weighs.
+struct TriangleBeams {
+    std::vector<Beam> beams;
+    std::vector<std::uint8_t> ends;
+    std::vector<int> end_object;
+    std::int64_t tir = 0, energy = 0, degenerate = 0, lost = 0, flipped = 0;
+    double min_ratio = 1e300, max_view_angle = 0.0;
+    bool folded = false;   // a beam passes a focus before it ends
+    // Empty, keeping the vectors' capacity.
+    void clear();
+};
+
+// generate()'s working storage, kept between frames by its owner so that the lattice (hundreds of megabytes
+// at 5 levels) and the leaves' beams are neither allocated nor mapped afresh each frame.
+struct GridScratch {
+    LatticePoints lattice;
+    std::vector<TriangleBeams> leaves;        // per leaf, in leaf order
+    std::vector<std::uint8_t> corner_marks;   // the leaves' corners on a dense lattice
+};
+
 class LightGrid {
 public:
     // Beams are extruded at most to the box of the scene's bounds and the camera (grown by 5 %).
@@ -76,7 +118,11 @@ public:
 
     // The beams into `out`, replacing what it held (its vectors keep their capacity: a set reused over frames
     // does not map its hundreds of megabytes afresh each frame).
-    void generate(BeamSet& out) const;
+    void generate(BeamSet& out, GridScratch& scratch) const;
+    void generate(BeamSet& out) const {
+        GridScratch scratch;
+        generate(out, scratch);
+    }
 
     const LightProjection& projection() const { return proj_; }
     int resolution() const { return res_; }
@@ -86,11 +132,12 @@ public:
 
 private:
     struct Cell { int level, i, j; };
-    struct Lattice;    // the traced lattice points (light_grid.cpp)
-    struct TriBeams;   // the beams of one triangle of lattice points (light_grid.cpp)
+    using Lattice = LatticePoints;
+    using TriBeams = TriangleBeams;
     void trace_points(Lattice& lattice, const std::vector<Cell>& cells, int size, int step) const;
     std::uint8_t oracle(const Lattice& lattice, const Cell& c, int size, int level, bool can_split) const;
-    void leaf_beams(const Lattice& lattice, const std::vector<Cell>& leaves, int s0, BeamSet& out) const;
+    void leaf_beams(const Lattice& lattice, const std::vector<Cell>& leaves, int s0, std::vector<TriBeams>& per,
+                    std::vector<std::uint8_t>& corner_marks, BeamSet& out) const;
     void make_triangle(const Lattice& lattice, const glm::ivec2 (&ci)[3], TriBeams& tb, bool clip) const;
     void emit(const glm::dvec2 (&c)[3], const LightPath* const (&p)[3], TriBeams& tb) const;
     double triangle_flux(const glm::dvec2& a, const glm::dvec2& b, const glm::dvec2& c) const;
