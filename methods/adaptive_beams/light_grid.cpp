@@ -162,11 +162,11 @@ double LightGrid::triangle_flux(const glm::dvec2& a, const glm::dvec2& b, const 
     return light.intensity * 2.0 * std::atan2(num, den);
 }
 
-void LatticePoints::reset(int res) {
+void LatticePoints::reset(int res, std::size_t dense_limit) {
     paths.clear();
     hashed.clear();
     const std::size_t n = static_cast<std::size_t>(res) + 1;
-    if (n * n <= kDenseLatticeLimit) {
+    if (n * n <= dense_limit) {
         side = static_cast<int>(n);
         dense.assign(n * n, -1);
     } else {
@@ -375,7 +375,9 @@ std::uint8_t LightGrid::oracle(const Lattice& lattice, const Cell& c, int size, 
         // past the first focus a fold of the ray map lies inside them, and a beam's one density
         // smears its 1/sqrt peak over the whole section (drawn sine cases at 1-1.5 x the first
         // focus: 0.11 without this test at a finest grid of 256, 0.088 with it).
-        thread_local TriBeams tb;   // reused: its vectors keep their capacity from cell to cell
+        // Reused per thread (its vectors keep their capacity from cell to cell); make_triangle starts no nested
+        // parallel work, so no other cell runs on this thread while it is in use.
+        thread_local TriBeams tb;
         tb.clear();
         const glm::ivec2 t0[3] = {q[0], q[1], q[2]}, t1[3] = {q[0], q[2], q[3]};
         make_triangle(lattice, t0, tb, false);
@@ -395,24 +397,26 @@ void LightGrid::leaf_beams(const Lattice& lattice, const std::vector<Cell>& leav
                            std::vector<std::uint8_t>& corner_marks, BeamSet& out) const {
     GridStats& st = out.stats;
     // The leaves' corners: a dense table where the lattice's is dense, a hash set beyond.
-    const std::size_t side = static_cast<std::size_t>(lattice.side);
+    const std::size_t dense_side = static_cast<std::size_t>(lattice.side);
     std::unordered_map<std::uint64_t, char> corner;
-    if (side > 0) corner_marks.assign(side * side, 0);
+    if (dense_side > 0) corner_marks.assign(dense_side * dense_side, 0);
     for (const Cell& c : leaves) {
         const int size = s0 >> c.level;
         for (int dj = 0; dj <= 1; ++dj)
             for (int di = 0; di <= 1; ++di) {
                 const int i = c.i + di * size, j = c.j + dj * size;
-                if (side > 0) corner_marks[static_cast<std::size_t>(j) * side + static_cast<std::size_t>(i)] = 1;
+                if (dense_side > 0) corner_marks[static_cast<std::size_t>(j) * dense_side + static_cast<std::size_t>(i)] = 1;
                 else corner.emplace(key(i, j), 1);
             }
     }
     auto is_corner = [&](const glm::ivec2& v) {
-        return side > 0 ? corner_marks[static_cast<std::size_t>(v.y) * side + static_cast<std::size_t>(v.x)] != 0
-                        : corner.count(key(v.x, v.y)) != 0;
+        return dense_side > 0 ? corner_marks[static_cast<std::size_t>(v.y) * dense_side + static_cast<std::size_t>(v.x)] != 0
+                              : corner.count(key(v.x, v.y)) != 0;
     };
     if (per.size() < leaves.size()) per.resize(leaves.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, leaves.size(), 16), [&](const tbb::blocked_range<std::size_t>& r) {
+        // Per thread: make_triangle (Embree's single rays) starts no nested parallel work that could run
+        // another leaf on this thread while the ring is in use.
         thread_local std::vector<glm::ivec2> ring;
         for (std::size_t n = r.begin(); n != r.end(); ++n) {
             const Cell& c = leaves[n];
@@ -467,7 +471,7 @@ void LightGrid::generate(BeamSet& out, GridScratch& scratch) const {
     out.end_object.clear();
     out.stats = GridStats{};
     Lattice& lattice = scratch.lattice;
-    lattice.reset(res_);
+    lattice.reset(res_, scratch.dense_limit);
     const int max_level = s_.adaptive ? s_.iterations : 0;
     const int s0 = res_ / s_.grid;
     std::vector<Cell> cells;

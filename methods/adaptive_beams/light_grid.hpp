@@ -11,6 +11,7 @@
 // leave the bilinear beam (Sec. 6), where its beam converges strongly for its share of the light,
 // where the beam is wide as seen from the camera, and where a beam passes a focus before it ends.
 #include <array>
+#include <cassert>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -79,14 +80,22 @@ struct LatticePoints {
     std::vector<int> dense;                        // side x side: index into paths, -1 not traced
     std::unordered_map<std::uint64_t, int> hashed;
     std::vector<LightPath> paths;
-    // Empty, for a lattice of res x res cells; the storage of the last frame is kept.
-    void reset(int res);
+    // Empty, for a lattice of res x res cells (dense where (res + 1)^2 <= dense_limit); the storage of the
+    // last frame is kept.
+    void reset(int res, std::size_t dense_limit = kDenseLatticeLimit);
     int find(int i, int j) const {
-        if (side > 0) return dense[static_cast<std::size_t>(j) * side + static_cast<std::size_t>(i)];
+        if (side > 0) {
+            assert(i >= 0 && j >= 0 && i < side && j < side);
+            return dense[static_cast<std::size_t>(j) * side + static_cast<std::size_t>(i)];
+        }
         const auto it = hashed.find((static_cast<std::uint64_t>(i) << 32) | static_cast<std::uint32_t>(j));
         return it == hashed.end() ? -1 : it->second;
     }
-    const LightPath& at(int i, int j) const { return paths[static_cast<std::size_t>(find(i, j))]; }
+    const LightPath& at(int i, int j) const {
+        const int k = find(i, j);
+        assert(k >= 0 && "a lattice point read before it was traced");
+        return paths[static_cast<std::size_t>(k)];
+    }
     void insert(int i, int j, int index);
 };
 
@@ -106,6 +115,7 @@ struct TriangleBeams {
 // generate()'s working storage, kept between frames by its owner so that the lattice (hundreds of megabytes
 // at 5 levels) and the leaves' beams are neither allocated nor mapped afresh each frame.
 struct GridScratch {
+    std::size_t dense_limit = LatticePoints::kDenseLatticeLimit;   // tests lower it to check the hashed lattice
     LatticePoints lattice;
     std::vector<TriangleBeams> leaves;        // per leaf, in leaf order
     std::vector<std::uint8_t> corner_marks;   // the leaves' corners on a dense lattice

@@ -94,9 +94,13 @@ AccuracyClaim CausticTriangles::accuracy_claim(const FrameGeometry& frame) const
     const double tan_tilt = std::sqrt(l.x * l.x + l.y * l.y) / -l.z;
     // Measured on the conformance cases and 800 drawn sine and Gaussian cases (four seeds; README.md): the
     // error is the grid's sampling of the surface. Before the first focus grid 256 stays under 0.03. Past it
-    // the folds sharpen: at grid 256, 0.14 between 1 and 3 x the first focus depth; at 512, 0.059 up to 3 x
+    // the folds sharpen: at grid 256, 0.128 from 1 to 1.5 x the first focus depth and 0.23 from 1.5 to 3 x; at
+    // 512, 0.059 up to 3 x
     // and 0.097 beyond (0.044 and 0.068 at 1024). So past the focus the claim needs the grid the receiver is
     // drawn at there, fold_refine x grid, to be 512 or finer, and the receiver at most 3 x the focus depth.
+    // render() refines where the base grid's map folds, which its sampling puts within a fraction of a percent
+    // of the first focus depth; just past the focus, where it may not fold yet, the base grid's error is that
+    // of a focus (grid 256: 0.018 up to 1.02 x, 0.057 up to 1.1 x), inside the claim.
     const regime::WaterRegime w = regime::water_regime(frame);
     const double depth_ratio = w.depth_over_first_focus();
     std::vector<RegimeBound> bounds = {{"tan_tilt_times_max_slope", tan_tilt * steepest, 1.0, true},
@@ -113,7 +117,7 @@ AccuracyClaim CausticTriangles::accuracy_claim(const FrameGeometry& frame) const
                           "grid^-2 below it)", base_grid_, kClaimMinGrid);
         else if (b.quantity == "grid_past_focus")
             std::snprintf(why, sizeof why, "the receiver lies past the first focus (%.2f x its depth), where the folds "
-                          "need a grid of %d or finer; it is drawn at %d (fold_refine x grid)",
+                          "need a grid of %d or finer; where the grid's map folds it is drawn at %d (fold_refine x grid)",
                           depth_ratio, kClaimMinFoldGrid, grid_past_focus());
         else if (b.quantity == "depth_over_first_focus")
             std::snprintf(why, sizeof why, "the receiver lies %.3g m below the water, %.2f x the first focus depth %.3g m, "
@@ -171,7 +175,7 @@ bool CausticTriangles::draw_dispersion_samples(const FrameGeometry& frame, const
         const std::int64_t folded_before = counters.folded;
         triangle_values(map, scale, counters);
         refract_ms += clock.ms();
-        if (stop_on_fold && k == 0 && counters.folded > folded_before) return false;
+        if (stop_on_fold && counters.folded > folded_before) return false;
 
         clock.reset();
         Image& target = dispersive ? sample_map_ : scalar;
@@ -268,8 +272,11 @@ CausticOutput CausticTriangles::render(const FrameGeometry& frame, const RenderR
     // instead; the probe's refraction is the cost of a frame past the focus, nothing is drawn twice.
     const bool probe = grid_past_focus() > base_grid_;
     const bool regrid = !draw_at(base_grid_, probe);
-    if (regrid) {
+    if (regrid) {   // a later dispersion sample (a higher index focuses sooner) may fold after earlier ones drew
         counters = Counters{};
+        raster_stats = RasterStats{};
+        out.receiver = Image(W, H);
+        if (dispersive) out.receiver_rgb = Image(W, H, 3);
         draw_at(grid_past_focus(), false);
     }
     if (!map.plane) {   // height-field receiver: flux per bin -> irradiance by each bin's surface area

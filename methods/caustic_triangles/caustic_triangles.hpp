@@ -103,7 +103,7 @@ private:
     // One pass per dispersion sample (one pass without dispersion): refract every vertex with that
     // sample's index, turn the triangles into flux values and rasterise them. `scalar` receives the
     // samples' average, `rgb` their spectral sum (dispersion only); `periodic` wraps toroidally. With
-    // `stop_on_fold`, returns false before drawing anything when the first sample's map folds.
+    // `stop_on_fold`, returns false as soon as a sample's map folds, before drawing that sample.
     bool draw_dispersion_samples(const FrameGeometry& frame, const ChartMap& map, int W, int H, double scale,
                                  bool periodic, Image& scalar, Image& rgb, Counters& counters,
                                  RasterStats& raster_stats, double& refract_ms, double& raster_ms,

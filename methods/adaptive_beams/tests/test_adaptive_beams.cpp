@@ -27,6 +27,7 @@
 #include "reference_support.hpp"
 #include "method_support.hpp"
 #include "sine_truth_support.hpp"
+#include "../light_grid.hpp"
 
 using namespace caustics;
 
@@ -579,4 +580,35 @@ TEST(AdaptiveBeams, CameraSurfaceByCoverageAgreesWithTheReferenceAtTheFocus) {
     // grid's (128) resolution of the focus, not the filter.
     EXPECT_GE(pass_cover, 0.75 * pixels);
     EXPECT_LT(t2_cover, 1e-3 * t2_point);
+}
+
+// Beam generation's lattice is a dense index table up to (res + 1)^2 <= 2^24 and a hash map beyond (grids of
+// 4096 and more): both give the same beams, and a scratch reused for a second frame gives them again.
+TEST(AdaptiveBeamsGrid, HashedLatticeGivesTheDenseLatticesBeams) {
+    using namespace caustics::adaptive_beams;
+    const Scene scene = load_scene(std::string(CAUSTICS_SOURCE_DIR) + "/scenes/sine_deep.json");
+    const FrameGeometry frame = build_frame_geometry(scene, 0);
+    const RayTracer tracer(frame);
+    const LightGrid grid(frame, tracer, GridSettings{});
+    GridScratch dense_scratch, hashed_scratch;
+    hashed_scratch.dense_limit = 0;
+    BeamSet dense, hashed, again;
+    grid.generate(dense, dense_scratch);
+    grid.generate(hashed, hashed_scratch);
+    grid.generate(again, dense_scratch);
+    EXPECT_GT(dense_scratch.lattice.side, 0);
+    EXPECT_EQ(hashed_scratch.lattice.side, 0);
+    EXPECT_GT(dense.beams.size(), 1000u);
+    for (const BeamSet* other : {&hashed, &again}) {
+        ASSERT_EQ(other->beams.size(), dense.beams.size());
+        EXPECT_EQ(other->ends, dense.ends);
+        EXPECT_EQ(other->end_object, dense.end_object);
+        EXPECT_EQ(other->stats.beams_split, dense.stats.beams_split);
+        for (std::size_t k = 0; k < dense.beams.size(); ++k) {
+            const Beam &a = dense.beams[k], &b = other->beams[k];
+            ASSERT_TRUE(a.c == b.c && a.n == b.n && a.ys == b.ys && a.ye == b.ye && a.flux == b.flux && a.a0 == b.a0 &&
+                        a.a1 == b.a1 && a.a2 == b.a2 && a.y0 == b.y0 && a.y1 == b.y1)
+                << "beam " << k;
+        }
+    }
 }

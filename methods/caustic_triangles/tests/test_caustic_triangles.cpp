@@ -17,6 +17,7 @@
 #include <caustics/reference/reference.hpp>
 #include <caustics/api/registry.hpp>
 #include <caustics/scene/water_scene.hpp>
+#include <caustics/blocks/regime/first_focus.hpp>
 
 using namespace caustics;
 
@@ -373,4 +374,42 @@ TEST(CausticTriangles, ClaimsPastTheFocusOnlyAtTheFoldGrid) {
     m->prepare(before);
     m->update(f2);
     EXPECT_TRUE(m->accuracy_claim(f2).inside);
+}
+
+// The claim asks for the refined grid wherever the floor lies past the first focus; render() refines where
+// the grid's map folds. The two agree just either side of the focus: at 1.01 x its depth the grid-256 map
+// of `sine` folds already, at 0.99 x it does not.
+TEST(CausticTriangles, RefinesJustPastTheFocusWhereTheClaimAsksForIt) {
+    Scene scene = load_scene(std::string(CAUSTICS_SOURCE_DIR) + "/scenes/sine.json");
+    const regime::WaterRegime w = regime::water_regime(build_frame_geometry(scene, 0));
+    ASSERT_TRUE(w.valid);
+    ASSERT_LT(w.focus.first_focus_depth, 1e299);
+    for (const double fraction : {0.99, 1.01}) {
+        scene.objects[1].center.z = w.surface_z - fraction * w.focus.first_focus_depth;
+        const FrameGeometry frame = build_frame_geometry(scene, 0);
+        const regime::WaterRegime at = regime::water_regime(frame);
+        EXPECT_NEAR(at.depth_over_first_focus(), fraction, 1e-6);
+        const CausticOutput out = render(scene, {}, 256, 256);
+        EXPECT_EQ(out.health.get("drawn_refined"), fraction > 1.0 ? 1 : 0) << fraction;
+        std::unique_ptr<Method> m = info().create(ParamSet::resolve(info().name, info().params, {}));
+        m->prepare(scene);
+        m->update(frame);
+        const AccuracyClaim claim = m->accuracy_claim(frame);
+        EXPECT_TRUE(claim.inside) << claim.reason;
+        bool asks = false;
+        for (const RegimeBound& b : claim.bounds) asks = asks || b.quantity == "grid_past_focus";
+        EXPECT_EQ(asks, fraction > 1.0) << fraction;
+    }
+}
+
+// With dispersion the highest index focuses first: the probe looks at every sample, and a refined frame
+// equals a render at the refined grid (nothing of the probe's samples is left in the images).
+TEST(CausticTriangles, DispersiveFramePastTheFocusIsDrawnAtTheRefinedGrid) {
+    Scene scene = load_scene(std::string(CAUSTICS_SOURCE_DIR) + "/scenes/sine_deep.json");
+    scene.objects[0].material.dispersion = 0.05;
+    const CausticOutput refined = render(scene, {{"dispersion_samples", "4"}}, 128, 128);
+    EXPECT_EQ(refined.health.get("drawn_refined"), 1);
+    const CausticOutput at512 = render(scene, {{"dispersion_samples", "4"}, {"grid", "512"}, {"fold_refine", "1"}}, 128, 128);
+    EXPECT_EQ(refined.receiver.pixels, at512.receiver.pixels);
+    EXPECT_EQ(refined.receiver_rgb.pixels, at512.receiver_rgb.pixels);
 }
