@@ -37,6 +37,7 @@ public:
         grid_.clamp_ratio = p.get_float("clamp_ratio");
         grid_.energy_cutoff = p.get_float("energy_cutoff");
         volume_iterations_ = static_cast<int>(p.get_int("volume_iterations"));
+        fold_iterations_ = static_cast<int>(p.get_int("fold_iterations"));
         acc_.hull = p.get_enum("hull") == "prism" ? HullType::Prism : HullType::Tight;
         acc_.volume.samples = static_cast<int>(p.get_int("volume_samples"));
         acc_.volume.step = static_cast<int>(p.get_int("volume_step"));
@@ -65,7 +66,13 @@ public:
         CausticOutput out;
         const Scene& scene = *frame.scene;
         Stopwatch clock;
-        const LightGrid grid(frame, *tracer_, grid_);
+        // Past the reach of `iterations` on water (the floor beyond 0.7 of the way to the first focus at the
+        // defaults) the surfaces' beams get fold_iterations levels: there the folds need a finest grid of 512
+        // (README, "Regime of validity and claim"); pool, 2.1 x past its focus, pays 2x its frame for it.
+        GridSettings surfaces = grid_;
+        surfaces.iterations = surface_levels(frame, grid_, fold_iterations_);
+        const bool refined = surfaces.iterations != grid_.iterations;
+        const LightGrid grid(frame, *tracer_, surfaces);
         grid.generate(beams_, scratch_);
         const BeamSet& set = beams_;
         // The volume view's own beams where it asks for fewer levels: in-scattered light is smooth along
@@ -109,6 +116,7 @@ public:
             out.stages_ms.emplace_back("surface_caustics", clock.ms());
         }
         const GridStats& st = set.stats;
+        out.health.add("refined_past_focus", refined ? 1 : 0);   // 1: the surfaces' beams had fold_iterations levels
         out.health.add("beams_generated", st.beams_generated);
         out.health.add("beams_split", st.beams_split);
         out.health.add("discarded_tir", st.discarded_tir);
@@ -139,7 +147,9 @@ public:
         return out;
     }
 
-    AccuracyClaim accuracy_claim(const FrameGeometry& frame) const override { return claim_for(frame, grid_); }
+    AccuracyClaim accuracy_claim(const FrameGeometry& frame) const override {
+        return claim_for(frame, grid_, fold_iterations_);
+    }
 
 private:
     GridSettings grid_;
@@ -148,6 +158,7 @@ private:
     BeamSet beams_, volume_beams_;
     GridScratch scratch_;
     int volume_iterations_ = 2;   // the volume view's refinement levels; -1: the surfaces' (iterations)
+    int fold_iterations_ = 5;     // the surfaces' levels past the reach of `iterations` on water (surface_levels)
     AccumulateSettings acc_;
     std::unique_ptr<RayTracer> tracer_;
     const FrameGeometry* frame_ = nullptr;
@@ -172,6 +183,10 @@ MethodInfo method_info() {
         {"iterations", ParamType::Int, "3", 0, 6, {},
          "refinement levels of the split oracle (the paper: 3-4); ignored with adaptive=false",
          {"2", "3"}},
+        {"fold_iterations", ParamType::Int, "5", 0, 6, {},
+         "refinement levels of the surfaces' beams where the receiver lies beyond the reach of `iterations` on a "
+         "water surface (at the defaults: past 0.7 of the way to its first focus, where the folds need a finest "
+         "grid of 512); 0 or <= iterations: `iterations` throughout"},
         {"volume_iterations", ParamType::Int, "2", -1, 6, {},
          "camera_volume: refinement levels of the beams the volume view integrates, when fewer than "
          "`iterations` (a second, coarser beam set; the surfaces keep theirs); -1: the same beams as the "

@@ -45,21 +45,43 @@ Capability supports(const Scene& scene) {
     return Capability::yes();
 }
 
-AccuracyClaim claim_for(const FrameGeometry& frame, const GridSettings& s) {
+namespace {
+
+// How far past (or short of) the first focus the settings' beams were measured within the claim.
+double focus_limit_for(const GridSettings& s) {
     const int finest = s.grid << (s.adaptive ? s.iterations : 0);
     // A uniform grid (adaptive off) has every cell at the finest level: the deviation test is moot.
     const double deviation = s.adaptive ? s.deviation : 0.0;
-    const double focus_limit = deviation > kFineDeviation                          ? kFocusCoarse
-                               : finest >= kDeepFoldFinestGrid && s.adaptive && s.fold_split && s.iterations >= 1 &&
-                                         s.grid >= kDeepFoldMinGrid
-                                     ? kFocusDeepFolds
-                               : finest >= kFoldFinestGrid && (s.fold_split || !s.adaptive) ? kFocusFolds
-                                                                                           : kFocusFine;
+    return deviation > kFineDeviation                                                   ? kFocusCoarse
+           : finest >= kDeepFoldFinestGrid && s.adaptive && s.fold_split && s.iterations >= 1 && s.grid >= kDeepFoldMinGrid
+               ? kFocusDeepFolds
+           : finest >= kFoldFinestGrid && (s.fold_split || !s.adaptive) ? kFocusFolds
+                                                                         : kFocusFine;
+}
+
+int levels_for(const regime::WaterRegime& w, const GridSettings& s, int fold_iterations) {
+    if (!s.adaptive || fold_iterations <= s.iterations || !w.valid) return s.iterations;
+    return w.depth_over_first_focus() > focus_limit_for(s) ? fold_iterations : s.iterations;
+}
+
+}  // namespace
+
+int surface_levels(const FrameGeometry& frame, const GridSettings& s, int fold_iterations) {
+    if (!s.adaptive || fold_iterations <= s.iterations) return s.iterations;   // no regime to compute
+    return levels_for(regime::water_regime(frame), s, fold_iterations);
+}
+
+AccuracyClaim claim_for(const FrameGeometry& frame, const GridSettings& base, int fold_iterations) {
+    const regime::WaterRegime w = regime::water_regime(frame);
+    GridSettings s = base;
+    s.iterations = levels_for(w, base, fold_iterations);
+    const int finest = s.grid << (s.adaptive ? s.iterations : 0);
+    const double deviation = s.adaptive ? s.deviation : 0.0;
+    const double focus_limit = focus_limit_for(s);
     std::vector<RegimeBound> bounds = {{"finest_grid", static_cast<double>(finest), kMinFinestGrid, false},
                                        {"deviation", deviation, kCoarseDeviation, true}};
     // Solid refractors are not claimed: the beams through a ball lens's rim fold into its ring caustic
     // (ball_lens: nrmse 0.24 at grid 16, 3 levels, deviation 0.05; 0.19 at twice the grid).
-    const regime::WaterRegime w = regime::water_regime(frame);
     bounds.push_back({"water_interface", w.valid ? 1.0 : 0.0, 1.0, false});
     if (w.valid) bounds.push_back({"depth_over_first_focus", w.depth_over_first_focus(), focus_limit, true});
     return regime::claim_within_bounds(std::move(bounds), kClaimError, [&](const RegimeBound& b) -> std::string {

@@ -251,7 +251,7 @@ TEST(AdaptiveBeams, PastTheFocusClaimedAtAFinestGridOf512) {
     auto claim_at = [&](const std::map<std::string, std::string>& overrides) {
         return info.create(ParamSet::resolve(info.name, info.params, overrides))->accuracy_claim(frame);
     };
-    const AccuracyClaim four = claim_at({{"iterations", "4"}});
+    const AccuracyClaim four = claim_at({{"iterations", "4"}, {"fold_iterations", "0"}});
     EXPECT_FALSE(four.inside);
     EXPECT_NE(four.reason.find("6 x needs a finest adaptive grid of 512"), std::string::npos) << four.reason;
     // Neither without fold_split nor from a coarser initial grid (8, 6 levels): not measured.
@@ -261,10 +261,28 @@ TEST(AdaptiveBeams, PastTheFocusClaimedAtAFinestGridOf512) {
     ASSERT_TRUE(five.inside) << five.reason;
     const Rendered r = render(scene, {{"iterations", "5"}}, kBins, 2, false);
     const double e = nrmse(r.out.receiver, truth.receiver);
-    const double e3 = nrmse(render(scene, {}, kBins, 2, false).out.receiver, truth.receiver);
+    const double e3 = nrmse(render(scene, {{"fold_iterations", "0"}}, kBins, 2, false).out.receiver, truth.receiver);
     std::printf("sine 2.25 x its first focus, 20 deg: nrmse 3 levels %.4f, 5 levels %.4f, baseline %.4f\n", e3, e, baseline);
     EXPECT_LT(e, five.bound(baseline));
-    EXPECT_GT(e3, five.bound(baseline));   // why the defaults (finest 128) call it outside
+    EXPECT_GT(e3, five.bound(baseline));   // why 3 levels (finest 128) alone call it outside
+    EXPECT_FALSE(claim_at({{"fold_iterations", "0"}}).inside);
+    // At the defaults the surfaces' beams get fold_iterations (5) levels here: the same beams as iterations 5,
+    // and the claim says so.
+    const AccuracyClaim defaults = claim_at({});
+    EXPECT_TRUE(defaults.inside) << defaults.reason;
+    const Rendered d = render(scene, {}, kBins, 2, false);
+    EXPECT_EQ(d.out.health.get("refined_past_focus"), 1);
+    EXPECT_EQ(r.out.health.get("refined_past_focus"), 0);
+    EXPECT_EQ(d.out.receiver.pixels, r.out.receiver.pixels);
+}
+
+// Before the reach of `iterations` (sine: 0.62 of the way to its first focus) nothing is refined, and the
+// frame is the one fold_iterations 0 draws.
+TEST(AdaptiveBeams, NotRefinedWithinTheReachOfItsLevels) {
+    const Scene scene = test_support::shipped_scene("sine");
+    const Rendered d = render(scene, {}, 64, 2, false);
+    EXPECT_EQ(d.out.health.get("refined_past_focus"), 0);
+    EXPECT_EQ(d.out.receiver.pixels, render(scene, {{"fold_iterations", "0"}}, 64, 2, false).out.receiver.pixels);
 }
 
 // The ball lens's floor lies past the focus: beams flip, |A| is clamped near the focus, all is finite.
