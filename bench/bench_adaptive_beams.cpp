@@ -2,7 +2,8 @@
 // 5,300 beams on a GTX 470; goal here: 22 fps on sphere_fog on 2 cores): render() after update() at the
 // scenes' 1024 x 768 camera (pool_murky's 640 x 480 scaled to it), all three views, with the stages
 // (beam generation, camera beams = volume accumulation with the camera's surface caustics, receiver
-// surface caustics) as counters. Families: the scene (0 sphere_fog, 1 pool_murky), adaptive (16, 3 levels)
+// surface caustics) as counters. Families: the scene (0 sphere_fog, 1 pool_murky, 2.1 x past its focus: its
+// surfaces' beams get 5 levels at the defaults, fold_iterations), adaptive (16, 3 levels)
 // against the uniform 64 x 64 grid (beams and fill), and the tight hull against the prism (fill and time);
 // the second argument is the thread count (1 or 2); BM_VolumeView sweeps the volume view's levers
 // (volume_step, volume_subpixels: 1, 1 is the paper's one ray per pixel centre, 2, 2 the defaults);

@@ -67,8 +67,9 @@ public:
         const Scene& scene = *frame.scene;
         Stopwatch clock;
         // Past the reach of `iterations` on water (the floor beyond 0.7 of the way to the first focus at the
-        // defaults) the surfaces' beams get fold_iterations levels: there the folds need a finest grid of 512
-        // (README, "Regime of validity and claim"); pool, 2.1 x past its focus, pays 2x its frame for it.
+        // defaults) the surfaces' beams get the fewest levels up to fold_iterations whose regime reaches it: past
+        // the focus the folds need a finest grid of 256 (to 1.2 x) or 512 (to 6 x) (README, "Regime of validity
+        // and claim"); pool, 2.1 x past its focus, pays 2x its frame for it.
         GridSettings surfaces = grid_;
         surfaces.iterations = surface_levels(frame, grid_, fold_iterations_);
         const bool refined = surfaces.iterations != grid_.iterations;
@@ -79,7 +80,7 @@ public:
         // the camera rays, and on sphere_fog 2 levels take the volume view 0.59x the time of 3 for 1.6 % more
         // error (README, "Fewer beams for the volume"), while the surfaces need the finest level at the folds.
         const bool own_volume_set = request.camera_volume && grid_.adaptive && volume_iterations_ >= 0 &&
-                                    volume_iterations_ < grid_.iterations;
+                                    volume_iterations_ < surfaces.iterations;
         BeamSet& volume_set = volume_beams_;
         if (own_volume_set) {
             GridSettings coarse = grid_;
@@ -157,7 +158,7 @@ private:
     // their memory.
     BeamSet beams_, volume_beams_;
     GridScratch scratch_;
-    int volume_iterations_ = 2;   // the volume view's refinement levels; -1: the surfaces' (iterations)
+    int volume_iterations_ = 2;   // the volume view's refinement levels; -1: the surfaces' beams
     int fold_iterations_ = 5;     // the surfaces' levels past the reach of `iterations` on water (surface_levels)
     AccumulateSettings acc_;
     std::unique_ptr<RayTracer> tracer_;
@@ -181,16 +182,17 @@ MethodInfo method_info() {
          "paper's comparison is 64)",
          {"16", "32"}},
         {"iterations", ParamType::Int, "3", 0, 6, {},
-         "refinement levels of the split oracle (the paper: 3-4); ignored with adaptive=false",
+         "refinement levels of the split oracle (the paper: 3-4; the surfaces may get more past the focus on water: "
+         "fold_iterations); ignored with adaptive=false",
          {"2", "3"}},
         {"fold_iterations", ParamType::Int, "5", 0, 6, {},
-         "refinement levels of the surfaces' beams where the receiver lies beyond the reach of `iterations` on a "
-         "water surface (at the defaults: past 0.7 of the way to its first focus, where the folds need a finest "
-         "grid of 512); 0 or <= iterations: `iterations` throughout"},
+         "most refinement levels of the surfaces' beams where the receiver lies beyond the reach of `iterations` "
+         "on a water surface (at the defaults: past 0.7 of the way to its first focus): the fewest that reach it "
+         "(4 to 1.2 x the focus, 5 to 6 x); 0 or <= iterations: `iterations` throughout"},
         {"volume_iterations", ParamType::Int, "2", -1, 6, {},
-         "camera_volume: refinement levels of the beams the volume view integrates, when fewer than "
-         "`iterations` (a second, coarser beam set; the surfaces keep theirs); -1: the same beams as the "
-         "surfaces"},
+         "camera_volume: refinement levels of the beams the volume view integrates, when fewer than the "
+         "surfaces' (a second, coarser beam set; the surfaces keep theirs); -1: the same beams as the surfaces "
+         "(refined past the focus too, see fold_iterations)"},
         {"adaptive", ParamType::Bool, "true", 0, 0, {}, "refine the grid by the split oracle (false: uniform grid)"},
         {"hull", ParamType::Enum, "tight", 0, 0, {"tight", "prism"},
          "bounding volume rasterised into the camera: tight (the paper's 6 triangles: convex hull of the beam's "

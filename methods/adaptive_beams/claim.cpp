@@ -59,9 +59,19 @@ double focus_limit_for(const GridSettings& s) {
                                                                          : kFocusFine;
 }
 
+// The fewest levels up to fold_iterations whose measured regime reaches the receiver; `iterations` where the
+// receiver is within its own regime's reach, or where no level up to fold_iterations would reach it (a coarse
+// deviation test, fold_split off, or a receiver beyond 6 x the focus: refining would cost and claim nothing).
 int levels_for(const regime::WaterRegime& w, const GridSettings& s, int fold_iterations) {
     if (!s.adaptive || fold_iterations <= s.iterations || !w.valid) return s.iterations;
-    return w.depth_over_first_focus() > focus_limit_for(s) ? fold_iterations : s.iterations;
+    const double depth = w.depth_over_first_focus();
+    if (depth <= focus_limit_for(s)) return s.iterations;
+    for (int levels = s.iterations + 1; levels <= fold_iterations; ++levels) {
+        GridSettings refined = s;
+        refined.iterations = levels;
+        if (depth <= focus_limit_for(refined)) return levels;
+    }
+    return s.iterations;
 }
 
 }  // namespace
@@ -94,7 +104,8 @@ AccuracyClaim claim_for(const FrameGeometry& frame, const GridSettings& base, in
             return "no height-field water interface: solid refractors are not claimed (ball_lens, whose beams fold into "
                    "its ring caustic)";
         const char* further = focus_limit == kFocusCoarse
-                                  ? " (a deviation of at most 0.01 claims up to 0.7 of the way)"
+                                  ? " (a deviation of at most 0.01 claims up to 0.7 of the way at 3 levels, and up to 6 x "
+                                    "where the surfaces get fold_iterations levels)"
                                   : focus_limit == kFocusFine
                                         ? " (1.2 x needs a finest grid of 256 with fold_split, or a uniform grid of 256; "
                                           "6 x a finest adaptive grid of 512 from a grid of at least 16, with fold_split)"

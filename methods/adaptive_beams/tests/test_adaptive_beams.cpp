@@ -28,6 +28,7 @@
 #include "method_support.hpp"
 #include "sine_truth_support.hpp"
 #include "../light_grid.hpp"
+#include <caustics/blocks/regime/first_focus.hpp>
 
 using namespace caustics;
 
@@ -274,6 +275,50 @@ TEST(AdaptiveBeams, PastTheFocusClaimedAtAFinestGridOf512) {
     EXPECT_EQ(d.out.health.get("refined_past_focus"), 1);
     EXPECT_EQ(r.out.health.get("refined_past_focus"), 0);
     EXPECT_EQ(d.out.receiver.pixels, r.out.receiver.pixels);
+    double finest = 0.0;
+    for (const RegimeBound& b : defaults.bounds)
+        if (b.quantity == "finest_grid") finest = b.value;
+    EXPECT_EQ(finest, 512.0);   // 16 << 5: the claim states the refined beams' finest grid
+    // Where refining cannot widen the regime it is not done: the paper's coarse deviation test, or no fold split.
+    for (const auto& overrides : std::vector<std::map<std::string, std::string>>{{{"deviation", "0.05"}},
+                                                                              {{"fold_split", "false"}}}) {
+        EXPECT_EQ(render(scene, overrides, 64, 2, false).out.health.get("refined_past_focus"), 0);
+        EXPECT_FALSE(claim_at(overrides).inside);
+    }
+}
+
+// Between the reach of 3 levels (0.7 of the way) and 1.2 x the focus, 4 levels (a finest grid of 256, measured
+// to 1.2 x) are enough: `sine` with its floor at 1.0 x its first focus depth gets 4, not 5.
+TEST(AdaptiveBeams, RefinedOnlyAsFarAsTheReceiverNeeds) {
+    Scene scene = test_support::shipped_scene("sine");
+    const regime::WaterRegime w = regime::water_regime(build_frame_geometry(scene, 0));
+    ASSERT_TRUE(w.valid);
+    scene.objects[1].center.z = w.surface_z - 1.0 * w.focus.first_focus_depth;
+    const FrameGeometry frame = build_frame_geometry(scene, 0);
+    const MethodInfo& info = require_method(kMethod);
+    const AccuracyClaim claim = info.create(ParamSet::resolve(info.name, info.params, {}))->accuracy_claim(frame);
+    EXPECT_TRUE(claim.inside) << claim.reason;
+    double finest = 0.0;
+    for (const RegimeBound& b : claim.bounds)
+        if (b.quantity == "finest_grid") finest = b.value;
+    EXPECT_EQ(finest, 256.0);
+    const Rendered d = render(scene, {}, 64, 2, false);
+    EXPECT_EQ(d.out.health.get("refined_past_focus"), 1);
+    EXPECT_EQ(d.out.receiver.pixels, render(scene, {{"iterations", "4"}}, 64, 2, false).out.receiver.pixels);
+}
+
+// The volume view keeps its own levels (volume_iterations 2) when the surfaces are refined: pool_murky, 2.1 x
+// past its focus, draws the same camera_volume with and without fold_iterations.
+TEST(AdaptiveBeams, VolumeViewKeepsItsLevelsWhenTheSurfacesAreRefined) {
+    Scene scene = test_support::shipped_scene("pool_murky");
+    scene.camera.width = 48;
+    scene.camera.height = 36;
+    const Rendered d = render(scene, {}, 32, 2, true);
+    const Rendered off = render(scene, {{"fold_iterations", "0"}}, 32, 2, true);
+    EXPECT_EQ(d.out.health.get("refined_past_focus"), 1);
+    EXPECT_EQ(off.out.health.get("refined_past_focus"), 0);
+    EXPECT_EQ(d.out.camera_volume.pixels, off.out.camera_volume.pixels);
+    EXPECT_NE(d.out.receiver.pixels, off.out.receiver.pixels);
 }
 
 // Before the reach of `iterations` (sine: 0.62 of the way to its first focus) nothing is refined, and the
