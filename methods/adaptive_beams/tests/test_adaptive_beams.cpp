@@ -231,6 +231,21 @@ TEST(AdaptiveBeams, AdaptiveBeatsUniformAtEqualBeamCountOnSphere) {
     EXPECT_LT(e_adaptive, e_uniform);
 }
 
+// The finest light-space grid a claim states (its finest_grid bound), 0 where it states none.
+static double finest_grid_of(const AccuracyClaim& claim) {
+    for (const RegimeBound& b : claim.bounds)
+        if (b.quantity == "finest_grid") return b.value;
+    return 0.0;
+}
+
+// Renders `scene` at the defaults: whether its surfaces were refined past the focus, and that its receiver is
+// the one `same` draws (the settings whose beams the defaults must use there).
+static void expect_defaults_draw_as(const Scene& scene, int refined, const std::map<std::string, std::string>& same) {
+    const Rendered d = render(scene, {}, 64, 2, false);
+    EXPECT_EQ(d.out.health.get("refined_past_focus"), refined);
+    EXPECT_EQ(d.out.receiver.pixels, render(scene, same, 64, 2, false).out.receiver.pixels);
+}
+
 // Past the first focus the folds of the ray map lie inside the beams that cross them: a finest adaptive grid
 // of 512 with fold_split is claimed to 0.10 up to 6 x the first focus (600 drawn cases of three seeds, worst
 // 0.084). A sine 2.25 x its focus down under 20 deg light, against the exact truth: inside and met at 5
@@ -275,10 +290,7 @@ TEST(AdaptiveBeams, PastTheFocusClaimedAtAFinestGridOf512) {
     EXPECT_EQ(d.out.health.get("refined_past_focus"), 1);
     EXPECT_EQ(r.out.health.get("refined_past_focus"), 0);
     EXPECT_EQ(d.out.receiver.pixels, r.out.receiver.pixels);
-    double finest = 0.0;
-    for (const RegimeBound& b : defaults.bounds)
-        if (b.quantity == "finest_grid") finest = b.value;
-    EXPECT_EQ(finest, 512.0);   // 16 << 5: the claim states the refined beams' finest grid
+    EXPECT_EQ(finest_grid_of(defaults), 512.0);   // 16 << 5: the claim states the refined beams' finest grid
     // Where refining cannot widen the regime it is not done: the paper's coarse deviation test, or no fold split.
     for (const auto& overrides : std::vector<std::map<std::string, std::string>>{{{"deviation", "0.05"}},
                                                                               {{"fold_split", "false"}}}) {
@@ -298,13 +310,8 @@ TEST(AdaptiveBeams, RefinedOnlyAsFarAsTheReceiverNeeds) {
     const MethodInfo& info = require_method(kMethod);
     const AccuracyClaim claim = info.create(ParamSet::resolve(info.name, info.params, {}))->accuracy_claim(frame);
     EXPECT_TRUE(claim.inside) << claim.reason;
-    double finest = 0.0;
-    for (const RegimeBound& b : claim.bounds)
-        if (b.quantity == "finest_grid") finest = b.value;
-    EXPECT_EQ(finest, 256.0);
-    const Rendered d = render(scene, {}, 64, 2, false);
-    EXPECT_EQ(d.out.health.get("refined_past_focus"), 1);
-    EXPECT_EQ(d.out.receiver.pixels, render(scene, {{"iterations", "4"}}, 64, 2, false).out.receiver.pixels);
+    EXPECT_EQ(finest_grid_of(claim), 256.0);
+    expect_defaults_draw_as(scene, 1, {{"iterations", "4"}});
 }
 
 // The volume view keeps its own levels (volume_iterations 2) when the surfaces are refined: pool_murky, 2.1 x
@@ -324,10 +331,7 @@ TEST(AdaptiveBeams, VolumeViewKeepsItsLevelsWhenTheSurfacesAreRefined) {
 // Before the reach of `iterations` (sine: 0.62 of the way to its first focus) nothing is refined, and the
 // frame is the one fold_iterations 0 draws.
 TEST(AdaptiveBeams, NotRefinedWithinTheReachOfItsLevels) {
-    const Scene scene = test_support::shipped_scene("sine");
-    const Rendered d = render(scene, {}, 64, 2, false);
-    EXPECT_EQ(d.out.health.get("refined_past_focus"), 0);
-    EXPECT_EQ(d.out.receiver.pixels, render(scene, {{"fold_iterations", "0"}}, 64, 2, false).out.receiver.pixels);
+    expect_defaults_draw_as(test_support::shipped_scene("sine"), 0, {{"fold_iterations", "0"}});
 }
 
 // The ball lens's floor lies past the focus: beams flip, |A| is clamped near the focus, all is finite.
