@@ -25,6 +25,9 @@
 
 #include <gtest/gtest.h>
 
+#include <caustics/blocks/regime/first_focus.hpp>
+
+#include "conformance_cases.hpp"
 #include "conformance_drawn.hpp"
 #include "conformance_judge.hpp"
 
@@ -236,6 +239,25 @@ TEST_P(ConformanceDrawn, MeetsItsClaimOnDrawnHardCases) {
     if (seed == test_support::kDefaultConformanceSeed && brought_in > 0 && !cut) {
         EXPECT_GT(missed, 0) << info.name << ": its regime widened 2x still holds on the " << brought_in
                              << " drawn case(s) it brings in: the regime is narrower than the method";
+    }
+}
+
+// The per-frame form of the regime (RegimeParts::FocusOnly, which a render may compute every frame to decide
+// its resolution) gives the full regime's first focus to the bit, on drawn cases, on the 2-D pool and on a
+// flat surface (no focus), so that such a render and the claim decide alike.
+TEST(WaterRegime, FocusOnlyGivesTheFullRegimesFirstFocus) {
+    std::vector<Scene> scenes;
+    for (int i = 0; i < 24; ++i) scenes.push_back(test_support::drawn_case(test_support::kDefaultConformanceSeed, i).scene);
+    scenes.push_back(test_support::shipped_scene("pool"));
+    scenes.push_back(test_support::shipped_scene("flat_oblique"));
+    for (const Scene& scene : scenes) {
+        const FrameGeometry frame = build_frame_geometry(scene, 0);
+        const regime::WaterRegime all = regime::water_regime(frame);
+        const regime::WaterRegime focus = regime::water_regime(frame, regime::RegimeParts::FocusOnly);
+        ASSERT_TRUE(all.valid) << scene.name;
+        EXPECT_TRUE(focus.valid) << scene.name;
+        EXPECT_EQ(focus.focus.first_focus_depth, all.focus.first_focus_depth) << scene.name;
+        EXPECT_EQ(focus.depth_over_first_focus(), all.depth_over_first_focus()) << scene.name;
     }
 }
 

@@ -78,7 +78,8 @@ int levels_for(const regime::WaterRegime& w, const GridSettings& s, int fold_ite
 
 int surface_levels(const FrameGeometry& frame, const GridSettings& s, int fold_iterations) {
     if (!s.adaptive || fold_iterations <= s.iterations) return s.iterations;   // no regime to compute
-    return levels_for(regime::water_regime(frame), s, fold_iterations);
+    // The first focus alone: the same depth ratio the claim's full regime gives, at a fraction of its cost.
+    return levels_for(regime::water_regime(frame, regime::RegimeParts::FocusOnly), s, fold_iterations);
 }
 
 AccuracyClaim claim_for(const FrameGeometry& frame, const GridSettings& base, int fold_iterations) {

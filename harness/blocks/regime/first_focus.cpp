@@ -8,6 +8,9 @@
 #include <cstdio>
 #include <vector>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 namespace caustics::regime {
 namespace {
 
@@ -42,10 +45,15 @@ glm::dvec3 refract_direction(const glm::dvec3& light, const glm::dvec3& normal, 
     return glm::normalize(eta * light + (eta * cos_i - cos_t) * normal);
 }
 
+double first_focus_depth(const HeightField& hf, const glm::dvec3& light, double ior, double surface_z) {
+    double depth = 1e300;
+    for (double d : focus_depth_map(hf, light, ior, surface_z)) depth = std::min(depth, d);
+    return depth;
+}
+
 FocusAnalysis analyze_focus(const HeightField& hf, const glm::dvec3& light, double ior, double surface_z) {
     FocusAnalysis out;
-    const std::vector<double> map = focus_depth_map(hf, light, ior, surface_z);
-    for (double d : map) out.first_focus_depth = std::min(out.first_focus_depth, d);
+    out.first_focus_depth = first_focus_depth(hf, light, ior, surface_z);
     const glm::dvec3 l = glm::normalize(light);
     for (int b = 0; b < hf.ny; ++b)
         for (int a = 0; a < hf.nx; ++a) {
@@ -66,29 +74,35 @@ std::vector<double> focus_depth_map(const HeightField& hf, const glm::dvec3& lig
     const int nx = hf.nx, ny = hf.ny;
     std::vector<double> out(static_cast<std::size_t>(std::max(nx, 0)) * std::max(ny, 0), 1e300);
     if (nx < 2 || ny < 1) return out;
+    // Rows in parallel: every value is its vertex's own, so the map does not depend on the threads (a claim
+    // and a render that decide on it each frame agree).
     std::vector<glm::dvec2> u(static_cast<std::size_t>(nx) * ny);
-    for (int b = 0; b < ny; ++b)
-        for (int a = 0; a < nx; ++a) {
-            const glm::dvec3 n = normal_of(glm::dvec2(hf.grad(a, b)));
-            u[static_cast<std::size_t>(b) * nx + a] = run_of(refract_direction(light, n, ior));
-        }
+    tbb::parallel_for(tbb::blocked_range<int>(0, ny, 16), [&](const tbb::blocked_range<int>& rows) {
+        for (int b = rows.begin(); b != rows.end(); ++b)
+            for (int a = 0; a < nx; ++a) {
+                const glm::dvec3 n = normal_of(glm::dvec2(hf.grad(a, b)));
+                u[static_cast<std::size_t>(b) * nx + a] = run_of(refract_direction(light, n, ior));
+            }
+    });
     auto at = [&](int a, int b) { return u[static_cast<std::size_t>(b) * nx + a]; };
-    for (int b = 0; b < ny; ++b)
-        for (int a = 0; a < nx; ++a) {
-            const int a0 = std::max(a - 1, 0), a1 = std::min(a + 1, nx - 1);
-            const int b0 = std::max(b - 1, 0), b1 = std::min(b + 1, ny - 1);
-            const glm::dvec2 dudx = a1 > a0 ? (at(a1, b) - at(a0, b)) / ((a1 - a0) * hf.spacing.x) : glm::dvec2(0.0);
-            const glm::dvec2 dudy = b1 > b0 ? (at(a, b1) - at(a, b0)) / ((b1 - b0) * hf.spacing.y) : glm::dvec2(0.0);
-            const glm::dvec2 g(hf.grad(a, b)), uu = at(a, b);
-            // A = I + u g^T, B = grad u (columns d/dx, d/dy).
-            const double a00 = 1.0 + uu.x * g.x, a01 = uu.x * g.y, a10 = uu.y * g.x, a11 = 1.0 + uu.y * g.y;
-            const double b00 = dudx.x, b01 = dudy.x, b10 = dudx.y, b11 = dudy.y;
-            const double c0 = a00 * a11 - a01 * a10;
-            const double c1 = a00 * b11 + a11 * b00 - a01 * b10 - a10 * b01;
-            const double c2 = b00 * b11 - b01 * b10;
-            const double d = smallest_positive_root(c0, c1, c2);
-            if (d < 1e299) out[static_cast<std::size_t>(b) * nx + a] = d + surface_z - hf.z(a, b);
-        }
+    tbb::parallel_for(tbb::blocked_range<int>(0, ny, 16), [&](const tbb::blocked_range<int>& rows) {
+        for (int b = rows.begin(); b != rows.end(); ++b)
+            for (int a = 0; a < nx; ++a) {
+                const int a0 = std::max(a - 1, 0), a1 = std::min(a + 1, nx - 1);
+                const int b0 = std::max(b - 1, 0), b1 = std::min(b + 1, ny - 1);
+                const glm::dvec2 dudx = a1 > a0 ? (at(a1, b) - at(a0, b)) / ((a1 - a0) * hf.spacing.x) : glm::dvec2(0.0);
+                const glm::dvec2 dudy = b1 > b0 ? (at(a, b1) - at(a, b0)) / ((b1 - b0) * hf.spacing.y) : glm::dvec2(0.0);
+                const glm::dvec2 g(hf.grad(a, b)), uu = at(a, b);
+                // A = I + u g^T, B = grad u (columns d/dx, d/dy).
+                const double a00 = 1.0 + uu.x * g.x, a01 = uu.x * g.y, a10 = uu.y * g.x, a11 = 1.0 + uu.y * g.y;
+                const double b00 = dudx.x, b01 = dudy.x, b10 = dudx.y, b11 = dudy.y;
+                const double c0 = a00 * a11 - a01 * a10;
+                const double c1 = a00 * b11 + a11 * b00 - a01 * b10 - a10 * b01;
+                const double c2 = b00 * b11 - b01 * b10;
+                const double d = smallest_positive_root(c0, c1, c2);
+                if (d < 1e299) out[static_cast<std::size_t>(b) * nx + a] = d + surface_z - hf.z(a, b);
+            }
+    });
     return out;
 }
 
@@ -128,7 +142,7 @@ SurfaceScales surface_scales(const HeightField& hf) {
     return out;
 }
 
-WaterRegime water_regime(const FrameGeometry& frame) {
+WaterRegime water_regime(const FrameGeometry& frame, RegimeParts parts) {
     WaterRegime r;
     if (!frame.scene || frame.scene->lights.empty()) return r;
     for (const ObjectInstance& o : frame.objects)
@@ -149,8 +163,12 @@ WaterRegime water_regime(const FrameGeometry& frame) {
     for (const ObjectInstance& o : frame.objects)
         if (o.object && o.object->material.type == MaterialType::Diffuse && o.bounds.valid() && o.bounds.lo.z < r.surface_z)
             r.depth = std::max(r.depth, r.surface_z - o.bounds.lo.z);
-    r.focus = analyze_focus(hf, dir, r.ior, r.surface_z);
-    r.feature_length = surface_scales(hf).feature;
+    if (parts == RegimeParts::FocusOnly) {
+        r.focus.first_focus_depth = first_focus_depth(hf, dir, r.ior, r.surface_z);
+    } else {
+        r.focus = analyze_focus(hf, dir, r.ior, r.surface_z);
+        r.feature_length = surface_scales(hf).feature;
+    }
     r.valid = true;
     return r;
 }

@@ -32,6 +32,8 @@ glm::dvec3 refract_direction(const glm::dvec3& light, const glm::dvec3& normal, 
 // smallest positive root of its determinant (a quadratic in h - z), the local focus. Paraxially, at
 // normal incidence this is n / ((n - 1) kappa) for a crest of curvature kappa.
 FocusAnalysis analyze_focus(const HeightField& hf, const glm::dvec3& light, double ior, double surface_z);
+// Its first_focus_depth alone: the smallest of focus_depth_map's values.
+double first_focus_depth(const HeightField& hf, const glm::dvec3& light, double ior, double surface_z);
 // The same per interface vertex: the depth below surface_z where the ray entering there focuses
 // (1e300: never), hf.nx x hf.ny values, row-major.
 std::vector<double> focus_depth_map(const HeightField& hf, const glm::dvec3& light, double ior, double surface_z);
@@ -63,7 +65,10 @@ struct WaterRegime {
         return focus.first_focus_depth < 1e299 ? depth / focus.first_focus_depth : 0.0;
     }
 };
-WaterRegime water_regime(const FrameGeometry& frame);
+// What water_regime computes: everything, or (for a decision taken every frame) the first focus alone, with
+// focus.max_curvature, focus.shadowed and feature_length left at their defaults.
+enum class RegimeParts { All, FocusOnly };
+WaterRegime water_regime(const FrameGeometry& frame, RegimeParts parts = RegimeParts::All);
 
 // The claim of a regime delimited by `bounds`: within max_error where every bound holds, else outside with
 // the reason `explain` gives for the first bound that fails (the bounds are kept either way).
