@@ -127,12 +127,8 @@ public:
     LightGrid(const FrameGeometry& frame, const RayTracer& tracer, const GridSettings& settings);
 
     // The beams into `out`, replacing what it held (its vectors keep their capacity: a set reused over frames
-    // does not map its hundreds of megabytes afresh each frame).
+    // does not map its hundreds of megabytes afresh each frame), with `scratch` as the working storage.
     void generate(BeamSet& out, GridScratch& scratch) const;
-    void generate(BeamSet& out) const {
-        GridScratch scratch;
-        generate(out, scratch);
-    }
 
     const LightProjection& projection() const { return proj_; }
     int resolution() const { return res_; }

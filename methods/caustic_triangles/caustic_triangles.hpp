@@ -90,7 +90,7 @@ private:
     void ensure_topology();
     // The grid the receiver is drawn at where the base grid's map folds: fold_refine x grid, at most the
     // largest grid the `grid` parameter accepts.
-    int grid_past_focus() const { return std::min(base_grid_ * fold_refine_, std::max(base_grid_, kMaxGrid)); }
+    int grid_past_focus() const { return std::min(base_grid_ * fold_refine_, kMaxGrid); }
     void render_texture(const FrameGeometry& frame, const TextureRequest& request, CausticOutput& out);
     void resample_surface(const HeightField& hf);
     void compute_triangle_flux(const glm::dvec3& light_dir, double e0);
