@@ -57,16 +57,17 @@ double fresnel_t(double cos_i, double cos_t, double n1, double n2) {
 
 class CausticMapping final : public Method {
 public:
-    explicit CausticMapping(const ParamSet& p) : s_(settings_from(p)) {}
+    explicit CausticMapping(const ParamSet& p) : base_(settings_from(p)), s_(base_) {}
 
     Capability capabilities(const Scene& scene) const override;
     void update(const FrameGeometry& frame) override {
+        s_ = frame_settings(frame, base_);   // past the first focus: the fold regime's grid and map
         batches_ = build_batches(frame, s_.grid);
         frame_ = &frame;
         frame_index_ = frame.frame;
     }
     CausticOutput render(const FrameGeometry& frame, const RenderRequest& request) override;
-    AccuracyClaim accuracy_claim(const FrameGeometry& frame) const override { return claim_for(frame, s_); }
+    AccuracyClaim accuracy_claim(const FrameGeometry& frame) const override { return claim_for(frame, base_); }
 
 private:
     void draw_gbuffers(const FrameGeometry& frame, const Light& light, Counters& c, std::int64_t& clipped);
@@ -96,7 +97,8 @@ private:
     void exit_row(const Scene& scene, TraceRow& row, Counters& c) const;
     void land_row(TraceRow& row, Counters& c);
 
-    Settings s_;
+    Settings base_;   // the parameters
+    Settings s_;      // this frame's: base_, or the fold regime's grid and map (frame_settings)
     std::vector<Batch> batches_;
     const FrameGeometry* frame_ = nullptr;
     int frame_index_ = -1;
@@ -485,6 +487,7 @@ CausticOutput CausticMapping::render(const FrameGeometry& frame, const RenderReq
     h.add("shadowed_lookups", looked.shadowed);   // failed the depth test where the map holds caustic flux
     h.add("clipped_triangles", clipped);
     h.add("cube_map", receivers_.cube ? 1 : 0);
+    h.add("refined_past_focus", s_.grid != base_.grid || s_.map != base_.map ? 1 : 0);
     return out;
 }
 

@@ -10,6 +10,7 @@
 #include "geometry.hpp"
 #include <caustics/api/method.hpp>
 #include "positions_texture.hpp"
+#include <caustics/blocks/regime/first_focus.hpp>
 #include <caustics/blocks/splat/splat.hpp>
 
 namespace caustics::caustic_mapping {
@@ -19,6 +20,7 @@ enum class CubeMode { Auto, Off, On };
 
 constexpr int kMapPerGrid = 6;      // map = 0 (auto): caustic-map texels per grid vertex
 constexpr int kMinAutoMap = 768, kMaxAutoMap = 4096;
+constexpr int kMaxMap = 8192;       // the largest map the `map` parameter accepts
 
 struct Settings {
     int grid = 128;
@@ -37,6 +39,8 @@ struct Settings {
     bool absorption = true;
     double depth_bias = 1.0;
     bool debug_maps = false;
+    bool map_auto = true;          // `map` was 0: the map follows the grid (and the fold refinement's grid)
+    bool refine_past_focus = true;       // past the first focus, the frame is drawn at the fold regime's settings
 };
 
 // Per-render health, summed over threads.
@@ -73,6 +77,16 @@ constexpr double kFoldMapPerGrid = 12.0;
 // the claims, 24 reached 0.040 against the claimed 0.05, so the bound stays at 16.
 constexpr double kMinMapPerGrid = 6.0, kMaxMapPerGrid = 16.0;
 constexpr int kMinApproxIterations = 3;   // the approximate estimator's claim under tilted light
+// The settings a frame is drawn with. `s` itself, except where refine_past_focus is on, the map automatic and the
+// frame lies in the fold regime's reach but not in the settings' own (the receiver kFoldMinFocusFraction to
+// kFoldMaxFocusFraction x the first focus, light within kFoldMaxTiltDeg, the elliptic splats, bilinear
+// lookups and Newton's estimator): there the grid is raised to kFoldMinGrid and the map to kFoldMapPerGrid x
+// the grid, the settings the fold regime was measured at. Nowhere else: refining elsewhere would cost up to
+// 26 x the frame (pool) and widen no claim. render() decides it from the first focus alone
+// (regime::RegimeParts::FocusOnly), claim_for() from the full regime: the same depth ratio and tilt.
+Settings frame_settings(const regime::WaterRegime& w, const Settings& s);
+Settings frame_settings(const FrameGeometry& frame, const Settings& s);
+// The claim of the settings `s` on the frame, at the settings frame_settings() draws it with.
 AccuracyClaim claim_for(const FrameGeometry& frame, const Settings& s);
 MethodInfo caustic_mapping_info();
 std::unique_ptr<Method> make_caustic_mapping(const ParamSet& p);

@@ -13,26 +13,53 @@ namespace caustics::caustic_mapping {
 namespace {
 
 std::string format(const char* f, double a, double b = 0.0, double c = 0.0) {
-    char buf[320];
+    char buf[1024];
     std::snprintf(buf, sizeof buf, f, a, b, c);
     return buf;
 }
 
+// The settings the fold regime was measured with, whatever the grid and map.
+bool fold_gates(const Settings& s) {
+    return s.elliptic && s.bilinear && s.estimator.kind == EstimatorKind::Newton;
+}
+
+// The grid and map the fold regime was measured at.
+bool fold_resolution(const Settings& s) {
+    const double map_per_grid = static_cast<double>(s.map) / std::max(1, s.grid);
+    return s.grid >= kFoldMinGrid && std::abs(map_per_grid - kFoldMapPerGrid) < 1e-9;
+}
+
 }  // namespace
 
-AccuracyClaim claim_for(const FrameGeometry& frame, const Settings& s) {
+Settings frame_settings(const regime::WaterRegime& w, const Settings& s) {
+    if (!s.refine_past_focus || !s.map_auto || !w.valid || !fold_gates(s) || fold_resolution(s)) return s;
+    const double depth = w.depth_over_first_focus();
+    if (depth < kFoldMinFocusFraction || depth > kFoldMaxFocusFraction || w.tilt_deg > kFoldMaxTiltDeg) return s;
+    Settings refined = s;
+    refined.grid = std::max(s.grid, kFoldMinGrid);
+    refined.map = static_cast<int>(kFoldMapPerGrid) * refined.grid;
+    // Beyond the largest map (grid > 682) the fold regime's map cannot be drawn: nothing is refined.
+    return refined.map <= kMaxMap ? refined : s;
+}
+
+Settings frame_settings(const FrameGeometry& frame, const Settings& s) {
+    if (!s.refine_past_focus || !s.map_auto || !fold_gates(s) || fold_resolution(s)) return s;   // no regime to compute
+    return frame_settings(regime::water_regime(frame, regime::RegimeParts::FocusOnly), s);
+}
+
+AccuracyClaim claim_for(const FrameGeometry& frame, const Settings& base) {
     const Scene& scene = *frame.scene;
     if (scene.lights.size() != 1) return AccuracyClaim::outside("needs exactly one light");
     // Only height fields (water) have a measured regime; other specular shapes (the ball lens, meshes)
     // keep the default bound, checked on the ball lens's closed form.
     const regime::WaterRegime w = regime::water_regime(frame);
     if (!w.valid) return AccuracyClaim::within(kDefaultClaimError);
+    const Settings s = frame_settings(w, base);
     // Two regimes. Before 0.8 x the first focus, nrmse 0.05 from grid 64. Past it, the folds of the ray map
     // need the surface sampled finely and the map's texels well inside a bin (README.md "Past the first
     // focus"): settings that do both are held to 0.10 from 1.1 to 6 x the focus; other settings stay at 0.8.
     const double map_per_grid = static_cast<double>(s.map) / std::max(1, s.grid);
-    const bool fold_settings = s.grid >= kFoldMinGrid && std::abs(map_per_grid - kFoldMapPerGrid) < 1e-9 &&
-                               s.elliptic && s.bilinear && s.estimator.kind == EstimatorKind::Newton;
+    const bool fold_settings = fold_resolution(s) && fold_gates(s);
     const bool folds = fold_settings && w.depth_over_first_focus() > kMaxFocusFraction;
     const double focus_limit = folds ? kFoldMaxFocusFraction : kMaxFocusFraction;
     const double tilt_limit = folds ? kFoldMaxTiltDeg : kMaxTiltDeg;
@@ -67,9 +94,12 @@ AccuracyClaim claim_for(const FrameGeometry& frame, const Settings& s) {
             if (folds)
                 return why + format(", beyond the %.1f x where the regime past the focus was measured", kFoldMaxFocusFraction);
             return why + format(", beyond %.2f: past the focus the folds need a finer surface sampling and caustic map "
-                                "(the defaults, grid 128 and map 768, scored up to 0.35 on drawn cases there; grid >= 512 "
-                                "with a map of 12 x grid, the elliptic splats, bilinear lookups and Newton's estimator "
-                                "is claimed to 0.10 from 1.1 to 6 x the focus)",
+                                "(grid 128 and map 768 scored up to 0.35 on drawn cases there); at grid >= 512 with a map of "
+                                "12 x grid, the elliptic splats, bilinear lookups and Newton's estimator it is claimed to "
+                                "0.10 from 1.1 to 6 x the focus under light within 40 deg, and refine_past_focus draws "
+                                "such frames at those settings where the map is automatic; between 0.8 and 1.1 x the "
+                                "cusp where the first focus's two folds meet lies near the receiver (up to 0.14 measured "
+                                "there at those settings)",
                                 kMaxFocusFraction);
         }
         if (b.quantity == "grid") return format("grid %.0f below the %.0f where the claim was measured", b.value, b.limit);

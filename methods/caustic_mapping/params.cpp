@@ -38,6 +38,8 @@ Settings settings_from(const ParamSet& p) {
     s.absorption = p.get_bool("absorption");
     s.depth_bias = p.get_float("depth_bias");
     s.debug_maps = p.get_bool("debug_maps");
+    s.map_auto = p.get_int("map") == 0;
+    s.refine_past_focus = p.get_bool("refine_past_focus");
     return s;
 }
 
@@ -59,7 +61,7 @@ MethodInfo caustic_mapping_info() {
         {"grid", ParamType::Int, "128", 2, 4096, {}, "refractive vertex grid: specular positions/normals texture resolution (grid x grid)",
          {"64", "128"}},
         {"iterations", ParamType::Int, "3", 1, 1000, {}, "estimator iterations (updates of the distance d) per ray", {"1", "3"}},
-        {"map", ParamType::Int, "0", 0, 8192, {},
+        {"map", ParamType::Int, "0", 0, kMaxMap, {},
          "caustic-map and receiver positions texture resolution (map x map per face); 0: auto, 6 x grid, at least "
          "768 (the paper-era default, used up to grid 128) and at most 4096"},
         {"estimator", ParamType::Enum, "newton", 0, 0, {"approx", "newton"},
@@ -97,6 +99,11 @@ MethodInfo caustic_mapping_info() {
         {"filter", ParamType::Enum, "bilinear", 0, 0, {"bilinear", "nearest"}, "positions texture lookups: bilinear or nearest texel"},
         {"absorption", ParamType::Bool, "true", 0, 0, {}, "Beer-Lambert absorption (Eq. 7) inside dielectrics / in the water"},
         {"depth_bias", ParamType::Float, "1.0", 0.0, 100.0, {}, "scale of the receiver lookup's slope-scaled depth bias (about two texels)"},
+        {"refine_past_focus", ParamType::Bool, "true", 0, 0, {},
+         "where the receiver lies 1.1 to 6 x the first focus depth under light within 40 deg of the vertical (water; "
+         "map 0, elliptic splats, bilinear lookups, Newton's estimator), draw the frame at grid max(grid, 512) with "
+         "a map of 12 x that grid, the settings the claim past the focus was measured at (up to 26 x the frame's "
+         "time: pool 16 -> 420 ms); false: draw every frame at grid and map"},
         {"debug_maps", ParamType::Bool, "false", 0, 0, {}, "also output the caustic map (face 0, flux per texel) as a debug image"},
     };
     info.create = make_caustic_mapping;

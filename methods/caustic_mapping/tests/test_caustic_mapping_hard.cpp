@@ -170,12 +170,14 @@ TEST(CausticMappingHard, NewtonAtConvergenceHasNoBadDerivative) {
 }
 
 // Past the first focus (floor 1.2 m, focus 0.64 m) the Snell map folds: every preimage's splat adds.
-// Flux is kept and the error falls with the grid (the map follows it); the claim calls the case outside,
-// by the depth over the first focus (the folds' singularities leak across a map texel).
+// Flux is kept and the error falls with the grid (the map follows it); drawn at the grid asked for
+// (refine_past_focus off), the claim calls the case outside, by the depth over the first focus (the folds'
+// singularities leak across a map texel).
 TEST(CausticMappingHard, PastTheFocusFoldsAreSummed) {
     const SineSetup c = sine(0.0, -1.2, 0.5);
-    const Result r128 = run(c, {});
-    const Result r256 = run(c, {{"grid", "256"}});
+    const Result r128 = run(c, {{"refine_past_focus", "false"}});
+    const Result r256 = run(c, {{"grid", "256"}, {"refine_past_focus", "false"}});
+    EXPECT_EQ(r128.out.health.get("refined_past_focus"), 0);
     std::printf("sine_deep: nrmse grid 128 %.4f, grid 256 %.4f, baseline %.4f\n", r128.nrmse, r256.nrmse, r128.baseline);
     EXPECT_NEAR(r128.flux_ratio, 1.0, 0.01);
     EXPECT_FALSE(r128.claim.inside);
@@ -207,10 +209,13 @@ TEST(CausticMappingHard, PastTheFocusClaimedAtTheFoldSettings) {
         EXPECT_FALSE(a.inside) << why;
         EXPECT_NE(a.reason.find(why), std::string::npos) << a.reason;
     };
-    expect_refused(deep, Settings{}, "grid >= 512");
+    Settings as_asked;   // the defaults, drawn at grid 128 and map 768
+    as_asked.refine_past_focus = false;
+    expect_refused(deep, as_asked, "grid >= 512");
     Settings fine;
     fine.grid = kFoldMinGrid;
     fine.map = 3072;
+    fine.map_auto = false;
     expect_refused(deep, fine, "map of 12 x grid");
     fine.map = 6144;
     EXPECT_TRUE(claim_at(deep, fine).inside);
@@ -229,6 +234,51 @@ TEST(CausticMappingHard, PastTheFocusClaimedAtTheFoldSettings) {
     expect_refused(sine(0.0, -4.2, 0.2), fine, "beyond the 6.0 x");
     // Just past the focus (0.67 m: 1.05 x) the cusp lies near the receiver: outside, by the lower bound.
     expect_refused(sine(0.0, -0.67, 0.2), fine, "cusp");
+}
+
+// refine_past_focus (default on): a frame 1.1 to 6 x past the first focus under light within 40 deg is drawn
+// at the fold regime's settings, the same image to the bit as grid 512 with map 6144 asked for, and claimed
+// at them. Before the focus, and in the cusp's band just past it (where the fold settings are not claimed
+// either), the frame is drawn at grid and map, as it is with the map set by hand or the gates off.
+TEST(CausticMappingHard, DrawnAtTheFoldSettingsWhereTheirClaimReaches) {
+    const SineSetup deep = sine(20.0, -1.2, 0.2);
+    const Scene scene = test_support::make_sine_scene(deep);
+    const CausticOutput refined = test_support::render_method("caustic_mapping", scene, {}, deep.bins_x, deep.bins_y);
+    const CausticOutput asked = test_support::render_method("caustic_mapping", scene, {{"grid", "512"}, {"map", "6144"}},
+                                                             deep.bins_x, deep.bins_y);
+    EXPECT_EQ(refined.health.get("refined_past_focus"), 1);
+    EXPECT_EQ(asked.health.get("refined_past_focus"), 0);
+    ASSERT_EQ(refined.receiver.pixels.size(), asked.receiver.pixels.size());
+    EXPECT_EQ(std::memcmp(refined.receiver.pixels.data(), asked.receiver.pixels.data(),
+                          asked.receiver.pixels.size() * sizeof(float)), 0);
+    const FrameGeometry frame = build_frame_geometry(scene, 0);
+    const AccuracyClaim c = claim_for(frame, Settings{});
+    ASSERT_TRUE(c.inside) << c.reason;
+    EXPECT_DOUBLE_EQ(c.max_error, kFoldClaimError);
+    bool grid_bound = false;
+    for (const RegimeBound& b : c.bounds) grid_bound = grid_bound || (b.quantity == "grid" && b.value == kFoldMinGrid);
+    EXPECT_TRUE(grid_bound) << "the claim describes the grid the frame is drawn at";
+    // Where the fold regime does not reach, nothing is refined: the frame's settings are the parameters.
+    auto drawn_as_asked = [](const SineSetup& c, const Settings& s) {
+        const Scene sc = test_support::make_sine_scene(c);
+        const Settings f = frame_settings(build_frame_geometry(sc, 0), s);
+        return f.grid == s.grid && f.map == s.map;
+    };
+    const Settings defaults;
+    EXPECT_FALSE(drawn_as_asked(deep, defaults));
+    EXPECT_TRUE(drawn_as_asked(sine(0.0, -0.25, 0.2), defaults));    // 0.4 x: before the focus
+    EXPECT_TRUE(drawn_as_asked(sine(0.0, -0.67, 0.2), defaults));    // 1.05 x: the cusp's band
+    EXPECT_TRUE(drawn_as_asked(sine(0.0, -4.2, 0.2), defaults));     // 6.6 x: beyond the measured depths
+    EXPECT_TRUE(drawn_as_asked(sine(42.0, -1.2, 0.2), defaults));    // light beyond 40 deg
+    Settings fixed_map = defaults, point = defaults, off = defaults;
+    fixed_map.map_auto = false;
+    point.elliptic = false;
+    off.refine_past_focus = false;
+    for (const Settings& s : {fixed_map, point, off}) EXPECT_TRUE(drawn_as_asked(deep, s));
+    const SineSetup cusp = sine(0.0, -0.67, 0.2);
+    const AccuracyClaim cc = claim_for(build_frame_geometry(test_support::make_sine_scene(cusp), 0), defaults);
+    EXPECT_FALSE(cc.inside);
+    EXPECT_NE(cc.reason.find("cusp"), std::string::npos) << cc.reason;
 }
 
 // The claim's bound: sine at normal incidence and at 30 deg over a floor 0.25 m down (0.40 and 0.57 of the
@@ -270,6 +320,7 @@ TEST(CausticMappingHard, AccuracyClaimInsideAndOutside) {
     for (const auto& [map, which] : {std::pair{6144, "above the 16"}, std::pair{384, "below the 6"}}) {
         Settings ratio;
         ratio.map = map;
+        ratio.map_auto = false;
         const AccuracyClaim rc = claim_for(of, ratio);
         EXPECT_FALSE(rc.inside) << map;
         EXPECT_NE(rc.reason.find(which), std::string::npos) << rc.reason;
