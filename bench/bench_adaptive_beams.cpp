@@ -10,17 +10,23 @@
 // BM_OracleAndSurface compares the split oracle and camera surface settings with the former defaults;
 // BM_VolumeLanes the volume view's integrals in AVX2 lanes (1) against one ray at a time (0);
 // BM_HeapPolicy times the defaults under glibc's default heap limits (0: a fresh process's, before the
-// adaptation util/heap_policy.hpp describes) and under the program's policy (1).
+// adaptation util/heap_policy.hpp describes) and under the program's policy (1); BM_IntegralFloor the
+// arithmetic floor of one ray-beam integral on this CPU (the volume view's idealised bound).
 #include <benchmark/benchmark.h>
 
+#include <cmath>
 #include <map>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <tbb/global_control.h>
 
 #if defined(__GLIBC__)
 #include <malloc.h>
+#endif
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#include <immintrin.h>
 #endif
 
 #include <caustics/api/registry.hpp>
@@ -128,8 +134,63 @@ void BM_HeapPolicy(benchmark::State& state) {
     apply_heap_policy();
 }
 
+// The idealised bound of the volume view: the arithmetic no ray-beam integral can skip, at this CPU's
+// throughput. Each integral needs the ends of its ray's interval in the beam, which cost two divisions for
+// the slab and, for each of the three edge quadratics, a square root and two divisions (ray_beam.hpp,
+// roots_lanes); each quadrature node of an inside interval costs three divisions (the barycentric
+// coordinates, the phase function's cosine, the density), two square roots (the stretch and d^(3/2)) and
+// an exponential. The loop does exactly these, four integrals at a time in AVX2 lanes on independent data,
+// so that the divider and the exponential's throughput, not latency, bound it; the additions, products,
+// sorting, tests, memory traffic and the pixel loop of the real integral are left out. The argument is the
+// number of quadrature nodes per integral (0: the interval's ends alone; 2: one inside interval at the
+// default volume_samples). Counter ns_per_integral: the floor on one core.
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+__attribute__((target("avx2"))) double integral_floor(const double* a, const double* b, std::size_t n, int nodes) {
+    __m256d acc = _mm256_setzero_pd();
+    double exps = 0.0;
+    for (std::size_t i = 0; i + 4 <= n; i += 4) {
+        const __m256d x = _mm256_loadu_pd(a + i), y = _mm256_loadu_pd(b + i);
+        __m256d t = _mm256_add_pd(_mm256_div_pd(x, y), _mm256_div_pd(y, x));   // the slab's interval
+        for (int k = 0; k < 3; ++k) {   // the edge quadratics' roots
+            const __m256d r = _mm256_sqrt_pd(_mm256_add_pd(x, _mm256_set1_pd(k)));
+            t = _mm256_add_pd(t, _mm256_add_pd(_mm256_div_pd(r, y), _mm256_div_pd(x, r)));
+        }
+        for (int q = 0; q < nodes; ++q) {   // the integrand at a node
+            const __m256d s = _mm256_add_pd(t, _mm256_set1_pd(q + 1.0));
+            const __m256d u = _mm256_add_pd(_mm256_div_pd(x, s), _mm256_div_pd(y, s));
+            const __m256d v = _mm256_div_pd(_mm256_sqrt_pd(u), _mm256_sqrt_pd(s));
+            alignas(32) double e[4];
+            _mm256_store_pd(e, v);
+            for (double value : e) exps += std::exp(-value);
+        }
+        acc = _mm256_add_pd(acc, t);
+    }
+    alignas(32) double sum[4];
+    _mm256_store_pd(sum, acc);
+    return sum[0] + sum[1] + sum[2] + sum[3] + exps;
+}
+
+void BM_IntegralFloor(benchmark::State& state) {
+    if (!__builtin_cpu_supports("avx2")) {
+        state.SkipWithError("needs AVX2");
+        return;
+    }
+    const int nodes = static_cast<int>(state.range(0));
+    constexpr std::size_t n = 4096;   // 64 KiB of operands: in the first two cache levels
+    std::vector<double> a(n), b(n);
+    for (std::size_t i = 0; i < n; ++i) a[i] = 1.0 + 0.001 * static_cast<double>(i), b[i] = 2.0 + 0.0007 * static_cast<double>(i);
+    for (auto _ : state) benchmark::DoNotOptimize(integral_floor(a.data(), b.data(), n, nodes));
+    state.counters["ns_per_integral"] = benchmark::Counter(static_cast<double>(n) * static_cast<double>(state.iterations()),
+                                                           benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+    state.SetLabel(std::to_string(nodes) + " quadrature node(s) per integral, 1 thread");
+}
+#endif
+
 }  // namespace
 
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+BENCHMARK(BM_IntegralFloor)->Arg(0)->Arg(2)->Repetitions(5)->ReportAggregatesOnly(true);
+#endif
 BENCHMARK(BM_VolumeBeams)->ArgsProduct({{0, 1}, {2}, {-1, 2, 1}})->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true)->UseRealTime();
 BENCHMARK(BM_VolumeLanes)->ArgsProduct({{0, 1}, {1, 2}, {0, 1}})->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true)->UseRealTime();
 BENCHMARK(BM_HeapPolicy)->ArgsProduct({{0, 1}, {2}, {0, 1}})->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true)->UseRealTime();

@@ -77,14 +77,15 @@ constexpr double kFoldMapPerGrid = 12.0;
 // the claims, 24 reached 0.040 against the claimed 0.05, so the bound stays at 16.
 constexpr double kMinMapPerGrid = 6.0, kMaxMapPerGrid = 16.0;
 constexpr int kMinApproxIterations = 3;   // the approximate estimator's claim under tilted light
-// The settings a frame is drawn with. `s` itself, except where refine_past_focus is on, the map automatic and the
-// frame lies in the fold regime's reach but not in the settings' own (the receiver kFoldMinFocusFraction to
-// kFoldMaxFocusFraction x the first focus, light within kFoldMaxTiltDeg, the elliptic splats, bilinear
-// lookups and Newton's estimator): there the grid is raised to kFoldMinGrid and the map to kFoldMapPerGrid x
-// the grid, the settings the fold regime was measured at. Nowhere else: refining elsewhere would cost up to
-// 26 x the frame (pool) and widen no claim. render() decides it from the first focus alone
-// (regime::RegimeParts::FocusOnly), claim_for() from the full regime: the same depth ratio and tilt.
-Settings frame_settings(const regime::WaterRegime& w, const Settings& s);
+constexpr int kFoldMinIterations = 3;    // Newton's iterations the fold regime was measured with (the default)
+// The settings a frame is drawn with. `s` itself, except where refine_past_focus is on, the map automatic, the
+// light directional and the frame in the fold regime's reach but not in the settings' own (the receiver
+// kFoldMinFocusFraction to kFoldMaxFocusFraction x the first focus, light within kFoldMaxTiltDeg, the
+// elliptic splats, bilinear lookups and Newton's estimator with at least kFoldMinIterations): there the grid
+// is raised to kFoldMinGrid and the map to kFoldMapPerGrid x the grid, the settings the fold regime was
+// measured at. Nowhere else: refining elsewhere would cost 25-38 x the frame (pool, sine_deep) and widen no
+// claim. render() decides it from the first focus alone (regime::RegimeParts::FocusOnly), claim_for() from
+// the full regime: the same depth ratio and tilt.
 Settings frame_settings(const FrameGeometry& frame, const Settings& s);
 // The claim of the settings `s` on the frame, at the settings frame_settings() draws it with.
 AccuracyClaim claim_for(const FrameGeometry& frame, const Settings& s);

@@ -20,7 +20,8 @@ std::string format(const char* f, double a, double b = 0.0, double c = 0.0) {
 
 // The settings the fold regime was measured with, whatever the grid and map.
 bool fold_gates(const Settings& s) {
-    return s.elliptic && s.bilinear && s.estimator.kind == EstimatorKind::Newton;
+    return s.elliptic && s.bilinear && s.estimator.kind == EstimatorKind::Newton &&
+           s.estimator.iterations >= kFoldMinIterations;
 }
 
 // The grid and map the fold regime was measured at.
@@ -29,22 +30,54 @@ bool fold_resolution(const Settings& s) {
     return s.grid >= kFoldMinGrid && std::abs(map_per_grid - kFoldMapPerGrid) < 1e-9;
 }
 
-}  // namespace
+bool directional(const FrameGeometry& frame) {
+    return frame.scene->lights.size() == 1 && frame.scene->lights[0].type == LightType::Directional;
+}
 
-Settings frame_settings(const regime::WaterRegime& w, const Settings& s) {
-    if (!s.refine_past_focus || !s.map_auto || !w.valid || !fold_gates(s) || fold_resolution(s)) return s;
+// Whether the settings allow the refinement at all (the frame aside).
+bool may_refine(const Settings& s, bool directional_light) {
+    return s.refine_past_focus && s.map_auto && fold_gates(s) && !fold_resolution(s) && directional_light &&
+           static_cast<int>(kFoldMapPerGrid) * std::max(s.grid, kFoldMinGrid) <= kMaxMap;
+}
+
+// Why a frame that is neither refined nor at the fold settings is drawn at its parameters (README.md "Past
+// the first focus"), for the claim's reason.
+std::string not_refined_because(const regime::WaterRegime& w, const Settings& s, bool directional_light) {
+    const double depth = w.depth_over_first_focus();
+    if (!s.refine_past_focus) return "refine_past_focus is off";
+    if (!s.map_auto) return "the map is set by hand";
+    if (!fold_gates(s))
+        return format("the fold regime was measured with the elliptic splats, bilinear lookups and Newton's estimator "
+                      "with at least %.0f iterations",
+                      kFoldMinIterations);
+    if (!directional_light) return "the fold regime was measured under directional light";
+    if (!may_refine(s, directional_light))
+        return format("grid %.0f: the fold regime's map of 12 x grid would exceed the largest map, %.0f", s.grid, kMaxMap);
+    if (depth < kFoldMinFocusFraction)
+        return format("between %.1f and %.1f x the cusp where the first focus's two folds meet lies near the receiver "
+                      "(up to 0.14 measured there at the fold settings)",
+                      kMaxFocusFraction, kFoldMinFocusFraction);
+    if (depth > kFoldMaxFocusFraction)
+        return format("beyond the %.0f x where the fold regime was measured", kFoldMaxFocusFraction);
+    return format("light %.1f deg from the vertical, beyond the %.0f deg where the fold regime was measured", w.tilt_deg,
+                  kFoldMaxTiltDeg);
+}
+
+Settings refined_settings(const regime::WaterRegime& w, const Settings& s, bool directional_light) {
+    if (!w.valid || !may_refine(s, directional_light)) return s;
     const double depth = w.depth_over_first_focus();
     if (depth < kFoldMinFocusFraction || depth > kFoldMaxFocusFraction || w.tilt_deg > kFoldMaxTiltDeg) return s;
     Settings refined = s;
     refined.grid = std::max(s.grid, kFoldMinGrid);
     refined.map = static_cast<int>(kFoldMapPerGrid) * refined.grid;
-    // Beyond the largest map (grid > 682) the fold regime's map cannot be drawn: nothing is refined.
-    return refined.map <= kMaxMap ? refined : s;
+    return refined;
 }
 
+}  // namespace
+
 Settings frame_settings(const FrameGeometry& frame, const Settings& s) {
-    if (!s.refine_past_focus || !s.map_auto || !fold_gates(s) || fold_resolution(s)) return s;   // no regime to compute
-    return frame_settings(regime::water_regime(frame, regime::RegimeParts::FocusOnly), s);
+    if (!may_refine(s, directional(frame))) return s;   // no regime to compute
+    return refined_settings(regime::water_regime(frame, regime::RegimeParts::FocusOnly), s, true);
 }
 
 AccuracyClaim claim_for(const FrameGeometry& frame, const Settings& base) {
@@ -54,7 +87,7 @@ AccuracyClaim claim_for(const FrameGeometry& frame, const Settings& base) {
     // keep the default bound, checked on the ball lens's closed form.
     const regime::WaterRegime w = regime::water_regime(frame);
     if (!w.valid) return AccuracyClaim::within(kDefaultClaimError);
-    const Settings s = frame_settings(w, base);
+    const Settings s = refined_settings(w, base, directional(frame));
     // Two regimes. Before 0.8 x the first focus, nrmse 0.05 from grid 64. Past it, the folds of the ray map
     // need the surface sampled finely and the map's texels well inside a bin (README.md "Past the first
     // focus"): settings that do both are held to 0.10 from 1.1 to 6 x the focus; other settings stay at 0.8.
@@ -94,13 +127,12 @@ AccuracyClaim claim_for(const FrameGeometry& frame, const Settings& base) {
             if (folds)
                 return why + format(", beyond the %.1f x where the regime past the focus was measured", kFoldMaxFocusFraction);
             return why + format(", beyond %.2f: past the focus the folds need a finer surface sampling and caustic map "
-                                "(grid 128 and map 768 scored up to 0.35 on drawn cases there); at grid >= 512 with a map of "
-                                "12 x grid, the elliptic splats, bilinear lookups and Newton's estimator it is claimed to "
+                                "(grid 128 and map 768 scored up to 0.35 on drawn cases there). At grid >= 512 with a map of "
+                                "12 x grid (the elliptic splats, bilinear lookups and Newton's estimator) it is claimed to "
                                 "0.10 from 1.1 to 6 x the focus under light within 40 deg, and refine_past_focus draws "
-                                "such frames at those settings where the map is automatic; between 0.8 and 1.1 x the "
-                                "cusp where the first focus's two folds meet lies near the receiver (up to 0.14 measured "
-                                "there at those settings)",
-                                kMaxFocusFraction);
+                                "frames there at those settings; this one is not refined: ",
+                                kMaxFocusFraction) +
+                   not_refined_because(w, base, directional(frame));
         }
         if (b.quantity == "grid") return format("grid %.0f below the %.0f where the claim was measured", b.value, b.limit);
         if (b.quantity == "map_per_grid")

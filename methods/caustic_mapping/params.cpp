@@ -100,10 +100,12 @@ MethodInfo caustic_mapping_info() {
         {"absorption", ParamType::Bool, "true", 0, 0, {}, "Beer-Lambert absorption (Eq. 7) inside dielectrics / in the water"},
         {"depth_bias", ParamType::Float, "1.0", 0.0, 100.0, {}, "scale of the receiver lookup's slope-scaled depth bias (about two texels)"},
         {"refine_past_focus", ParamType::Bool, "true", 0, 0, {},
-         "where the receiver lies 1.1 to 6 x the first focus depth under light within 40 deg of the vertical (water; "
-         "map 0, elliptic splats, bilinear lookups, Newton's estimator), draw the frame at grid max(grid, 512) with "
-         "a map of 12 x that grid, the settings the claim past the focus was measured at (up to 26 x the frame's "
-         "time: pool 16 -> 420 ms); false: draw every frame at grid and map"},
+         "where the receiver lies 1.1 to 6 x the first focus depth under directional light within 40 deg of the "
+         "vertical (water; map 0, elliptic splats, bilinear lookups, Newton's estimator with >= 3 iterations), draw "
+         "the frame at grid max(grid, 512) with a map of 12 x that grid, the settings the claim past the focus was "
+         "measured at (25-38 x the frame's time: pool 17 -> 437 ms, sine_deep 17 -> 625 ms); false: every frame at "
+         "grid and map (the paper)",
+         {"false", "true"}},
         {"debug_maps", ParamType::Bool, "false", 0, 0, {}, "also output the caustic map (face 0, flux per texel) as a debug image"},
     };
     info.create = make_caustic_mapping;

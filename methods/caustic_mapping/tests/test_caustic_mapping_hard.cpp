@@ -270,15 +270,19 @@ TEST(CausticMappingHard, DrawnAtTheFoldSettingsWhereTheirClaimReaches) {
     EXPECT_TRUE(drawn_as_asked(sine(0.0, -0.67, 0.2), defaults));    // 1.05 x: the cusp's band
     EXPECT_TRUE(drawn_as_asked(sine(0.0, -4.2, 0.2), defaults));     // 6.6 x: beyond the measured depths
     EXPECT_TRUE(drawn_as_asked(sine(42.0, -1.2, 0.2), defaults));    // light beyond 40 deg
-    Settings fixed_map = defaults, point = defaults, off = defaults;
+    Settings fixed_map = defaults, point = defaults, off = defaults, one_step = defaults;
     fixed_map.map_auto = false;
     point.elliptic = false;
     off.refine_past_focus = false;
-    for (const Settings& s : {fixed_map, point, off}) EXPECT_TRUE(drawn_as_asked(deep, s));
+    one_step.estimator.iterations = 1;   // the fold regime was measured at Newton's 3 iterations
+    for (const Settings& s : {fixed_map, point, off, one_step}) EXPECT_TRUE(drawn_as_asked(deep, s));
     const SineSetup cusp = sine(0.0, -0.67, 0.2);
     const AccuracyClaim cc = claim_for(build_frame_geometry(test_support::make_sine_scene(cusp), 0), defaults);
     EXPECT_FALSE(cc.inside);
-    EXPECT_NE(cc.reason.find("cusp"), std::string::npos) << cc.reason;
+    EXPECT_NE(cc.reason.find("not refined: between 0.8 and 1.1 x the cusp"), std::string::npos) << cc.reason;
+    const AccuracyClaim oc = claim_for(build_frame_geometry(test_support::make_sine_scene(deep), 0), one_step);
+    EXPECT_FALSE(oc.inside);
+    EXPECT_NE(oc.reason.find("at least 3 iterations"), std::string::npos) << oc.reason;
 }
 
 // The claim's bound: sine at normal incidence and at 30 deg over a floor 0.25 m down (0.40 and 0.57 of the
