@@ -63,7 +63,8 @@ constexpr int kMinGrid = 64;
 // The fold regime: past the first focus the error is the grid's sampling of the surface and the map's
 // texels across the folds (README.md "Past the first focus"). With grid >= kFoldMinGrid, a map of exactly
 // kFoldMapPerGrid texels per grid spacing (the setting measured: grid 512, map 6144), the elliptic splats,
-// bilinear lookups and Newton's estimator, nrmse <= kFoldClaimError from
+// bilinear lookups and Newton's estimator with at least kFoldMinIterations, under directional light, nrmse
+// <= kFoldClaimError from
 // kFoldMinFocusFraction to kFoldMaxFocusFraction x the first focus under light at most kFoldMaxTiltDeg from
 // the vertical (the drawn cases' range). Just past the focus the cusp where the two folds meet lies near
 // the receiver and its peak bins are not held (up to 0.14 measured between 1.0 and 1.1 x).

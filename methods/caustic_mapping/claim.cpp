@@ -40,27 +40,28 @@ bool may_refine(const Settings& s, bool directional_light) {
            static_cast<int>(kFoldMapPerGrid) * std::max(s.grid, kFoldMinGrid) <= kMaxMap;
 }
 
-// Why a frame that is neither refined nor at the fold settings is drawn at its parameters (README.md "Past
-// the first focus"), for the claim's reason.
+// Why a frame past kMaxFocusFraction that is not claimed in the fold regime is drawn at its parameters
+// (README.md "Past the first focus"), for the claim's reason: first what the frame's geometry and light
+// rule out whatever the settings, then the settings.
 std::string not_refined_because(const regime::WaterRegime& w, const Settings& s, bool directional_light) {
     const double depth = w.depth_over_first_focus();
-    if (!s.refine_past_focus) return "refine_past_focus is off";
-    if (!s.map_auto) return "the map is set by hand";
-    if (!fold_gates(s))
-        return format("the fold regime was measured with the elliptic splats, bilinear lookups and Newton's estimator "
-                      "with at least %.0f iterations",
-                      kFoldMinIterations);
-    if (!directional_light) return "the fold regime was measured under directional light";
-    if (!may_refine(s, directional_light))
-        return format("grid %.0f: the fold regime's map of 12 x grid would exceed the largest map, %.0f", s.grid, kMaxMap);
     if (depth < kFoldMinFocusFraction)
         return format("between %.1f and %.1f x the cusp where the first focus's two folds meet lies near the receiver "
                       "(up to 0.14 measured there at the fold settings)",
                       kMaxFocusFraction, kFoldMinFocusFraction);
     if (depth > kFoldMaxFocusFraction)
         return format("beyond the %.0f x where the fold regime was measured", kFoldMaxFocusFraction);
-    return format("light %.1f deg from the vertical, beyond the %.0f deg where the fold regime was measured", w.tilt_deg,
-                  kFoldMaxTiltDeg);
+    if (w.tilt_deg > kFoldMaxTiltDeg)
+        return format("light %.1f deg from the vertical, beyond the %.0f deg where the fold regime was measured",
+                      w.tilt_deg, kFoldMaxTiltDeg);
+    if (!directional_light) return "the fold regime was measured under directional light";
+    if (!fold_gates(s))
+        return format("the fold regime was measured with the elliptic splats, bilinear lookups and Newton's estimator "
+                      "with at least %.0f iterations",
+                      kFoldMinIterations);
+    if (!s.refine_past_focus) return "refine_past_focus is off";
+    if (!s.map_auto) return "the map is set by hand";
+    return format("grid %.0f: the fold regime's map of 12 x grid would exceed the largest map, %.0f", s.grid, kMaxMap);
 }
 
 Settings refined_settings(const regime::WaterRegime& w, const Settings& s, bool directional_light) {
@@ -92,7 +93,7 @@ AccuracyClaim claim_for(const FrameGeometry& frame, const Settings& base) {
     // need the surface sampled finely and the map's texels well inside a bin (README.md "Past the first
     // focus"): settings that do both are held to 0.10 from 1.1 to 6 x the focus; other settings stay at 0.8.
     const double map_per_grid = static_cast<double>(s.map) / std::max(1, s.grid);
-    const bool fold_settings = fold_resolution(s) && fold_gates(s);
+    const bool fold_settings = fold_resolution(s) && fold_gates(s) && directional(frame);
     const bool folds = fold_settings && w.depth_over_first_focus() > kMaxFocusFraction;
     const double focus_limit = folds ? kFoldMaxFocusFraction : kMaxFocusFraction;
     const double tilt_limit = folds ? kFoldMaxTiltDeg : kMaxTiltDeg;
@@ -128,8 +129,9 @@ AccuracyClaim claim_for(const FrameGeometry& frame, const Settings& base) {
                 return why + format(", beyond the %.1f x where the regime past the focus was measured", kFoldMaxFocusFraction);
             return why + format(", beyond %.2f: past the focus the folds need a finer surface sampling and caustic map "
                                 "(grid 128 and map 768 scored up to 0.35 on drawn cases there). At grid >= 512 with a map of "
-                                "12 x grid (the elliptic splats, bilinear lookups and Newton's estimator) it is claimed to "
-                                "0.10 from 1.1 to 6 x the focus under light within 40 deg, and refine_past_focus draws "
+                                "12 x grid (the elliptic splats, bilinear lookups and Newton's estimator with >= 3 "
+                                "iterations) it is claimed to 0.10 from 1.1 to 6 x the focus under directional light "
+                                "within 40 deg, and refine_past_focus draws "
                                 "frames there at those settings; this one is not refined: ",
                                 kMaxFocusFraction) +
                    not_refined_because(w, base, directional(frame));

@@ -16,6 +16,12 @@ def _truthy(series):
     return series.astype(str).str.strip().str.lower().isin(["true", "1"])
 
 
+def same_setting(series, value):
+    """Where a run's parameter column holds `value` (JSON's false and the CSV's "false" alike: compared as
+    lower-case text)."""
+    return series.astype(str).str.strip().str.lower() == str(value).strip().lower()
+
+
 def numeric(frame, column):
     """The column as numbers (NaN where empty or not a number; all NaN where the column is absent)."""
     if column not in frame:

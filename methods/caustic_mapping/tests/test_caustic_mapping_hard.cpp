@@ -283,6 +283,22 @@ TEST(CausticMappingHard, DrawnAtTheFoldSettingsWhereTheirClaimReaches) {
     const AccuracyClaim oc = claim_for(build_frame_geometry(test_support::make_sine_scene(deep), 0), one_step);
     EXPECT_FALSE(oc.inside);
     EXPECT_NE(oc.reason.find("at least 3 iterations"), std::string::npos) << oc.reason;
+    // A point light high above the same water: the fold regime was measured under directional light, so it
+    // is neither refined nor claimed there, even at the fold settings set by hand.
+    Scene lamp = test_support::make_sine_scene(deep);
+    lamp.lights[0].type = LightType::Point;
+    lamp.lights[0].position = glm::dvec3(0.0, 0.0, 20.0);
+    const FrameGeometry lamp_frame = build_frame_geometry(lamp, 0);
+    const Settings lamp_drawn = frame_settings(lamp_frame, defaults);
+    EXPECT_TRUE(lamp_drawn.grid == defaults.grid && lamp_drawn.map == defaults.map);
+    Settings by_hand;
+    by_hand.grid = kFoldMinGrid;
+    by_hand.map = 6144;
+    by_hand.map_auto = false;
+    const AccuracyClaim pc = claim_for(lamp_frame, by_hand);
+    EXPECT_FALSE(pc.inside);
+    EXPECT_NE(pc.reason.find("not refined: the fold regime was measured under directional light"), std::string::npos)
+        << pc.reason;
 }
 
 // The claim's bound: sine at normal incidence and at 30 deg over a floor 0.25 m down (0.40 and 0.57 of the

@@ -54,6 +54,20 @@ class ParetoTest(unittest.TestCase):
         self.assertEqual(pareto_front([(1.0, 1.0)]), [0])
 
 
+class SameSettingTest(unittest.TestCase):
+    # The paper settings of a spec (JSON values) pick runs by their CSV parameter columns, which pandas reads
+    # as booleans, numbers or text: false matches False and "false", 128 matches 128.0 written as "128".
+    def test_booleans_and_numbers(self):
+        import pandas as pd
+        from load import same_setting
+
+        flags = pd.Series([True, False, "false", "TRUE", None])
+        self.assertEqual(list(same_setting(flags, False)), [False, True, True, False, False])
+        self.assertEqual(list(same_setting(flags, "true")), [True, False, False, True, False])
+        grids = pd.Series(["128", "64", 128])
+        self.assertEqual(list(same_setting(grids, 128)), [True, False, True])
+
+
 class OldSweepReportTest(unittest.TestCase):
     """A sweep from before issue 11 (raw errors, render times only) must still report."""
 
