@@ -1,0 +1,129 @@
+// adaptive_beams past the first focus of water: the claim at a finest adaptive grid of 512, and the
+// refinement of the surfaces' beams (fold_iterations) only as far as the receiver needs, with the volume
+// view on its own levels.
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include <caustics/api/registry.hpp>
+#include <caustics/blocks/regime/first_focus.hpp>
+#include <caustics/reference/analytic_truth.hpp>
+#include "adaptive_beams_render.hpp"
+#include "conformance_cases.hpp"
+#include "method_support.hpp"
+#include "sine_truth_support.hpp"
+
+using namespace caustics;
+using namespace caustics::adaptive_beams_test;
+
+namespace {
+
+// The finest light-space grid a claim states (its finest_grid bound), 0 where it states none.
+double finest_grid_of(const AccuracyClaim& claim) {
+    for (const RegimeBound& b : claim.bounds)
+        if (b.quantity == "finest_grid") return b.value;
+    return 0.0;
+}
+
+// Renders `scene` at the defaults: whether its surfaces were refined past the focus, and that its receiver is
+// the one `same` draws (the settings whose beams the defaults must use there).
+void expect_defaults_draw_as(const Scene& scene, int refined, const std::map<std::string, std::string>& same) {
+    const Rendered d = render(scene, {}, 64, 2, false);
+    EXPECT_EQ(d.out.health.get("refined_past_focus"), refined);
+    EXPECT_EQ(d.out.receiver.pixels, render(scene, same, 64, 2, false).out.receiver.pixels);
+}
+
+}  // namespace
+
+// Past the first focus the folds of the ray map lie inside the beams that cross them: a finest adaptive grid
+// of 512 with fold_split is claimed to 0.10 up to 6 x the first focus (600 drawn cases of three seeds, worst
+// 0.084). A sine 2.25 x its focus down under 20 deg light, against the exact truth: inside and met at 5
+// levels; at 4 (finest 256, claimed to 1.2 x) outside, the reason naming what reaches 6 x.
+TEST(AdaptiveBeams, PastTheFocusClaimedAtAFinestGridOf512) {
+    test_support::SineSetup c = test_support::sine_case(20.0, -1.2, 0.2, false);
+    c.cell = 0.002;
+    const Scene scene = test_support::make_sine_scene(c);
+    const FrameGeometry frame = build_frame_geometry(scene, 0);
+    constexpr int kBins = 256;
+    const ReceiverChart chart(frame, kBins, kBins);
+    const AnalyticTruth truth = analytic_truth(frame, chart);
+    ASSERT_TRUE(truth.available) << truth.reason;
+    double mean = 0.0, var = 0.0;
+    for (float v : truth.receiver.pixels) mean += v / static_cast<double>(truth.receiver.pixels.size());
+    for (float v : truth.receiver.pixels) var += (v - mean) * (v - mean) / static_cast<double>(truth.receiver.pixels.size());
+    const double baseline = std::sqrt(var) / mean;
+    const MethodInfo& info = require_method(kMethod);
+    auto claim_at = [&](const std::map<std::string, std::string>& overrides) {
+        return info.create(ParamSet::resolve(info.name, info.params, overrides))->accuracy_claim(frame);
+    };
+    const AccuracyClaim four = claim_at({{"iterations", "4"}, {"fold_iterations", "0"}});
+    EXPECT_FALSE(four.inside);
+    EXPECT_NE(four.reason.find("6 x needs a finest adaptive grid of 512"), std::string::npos) << four.reason;
+    // Neither without fold_split nor from a coarser initial grid (8, 6 levels): not measured.
+    EXPECT_FALSE(claim_at({{"iterations", "5"}, {"fold_split", "false"}}).inside);
+    EXPECT_FALSE(claim_at({{"iterations", "6"}, {"grid", "8"}}).inside);
+    const AccuracyClaim five = claim_at({{"iterations", "5"}});
+    ASSERT_TRUE(five.inside) << five.reason;
+    const Rendered r = render(scene, {{"iterations", "5"}}, kBins, 2, false);
+    const double e = nrmse(r.out.receiver, truth.receiver);
+    const double e3 = nrmse(render(scene, {{"fold_iterations", "0"}}, kBins, 2, false).out.receiver, truth.receiver);
+    std::printf("sine 2.25 x its first focus, 20 deg: nrmse 3 levels %.4f, 5 levels %.4f, baseline %.4f\n", e3, e, baseline);
+    EXPECT_LT(e, five.bound(baseline));
+    EXPECT_GT(e3, five.bound(baseline));   // why 3 levels (finest 128) alone call it outside
+    EXPECT_FALSE(claim_at({{"fold_iterations", "0"}}).inside);
+    // At the defaults the surfaces' beams get fold_iterations (5) levels here: the same beams as iterations 5,
+    // and the claim says so.
+    const AccuracyClaim defaults = claim_at({});
+    EXPECT_TRUE(defaults.inside) << defaults.reason;
+    const Rendered d = render(scene, {}, kBins, 2, false);
+    EXPECT_EQ(d.out.health.get("refined_past_focus"), 1);
+    EXPECT_EQ(r.out.health.get("refined_past_focus"), 0);
+    EXPECT_EQ(d.out.receiver.pixels, r.out.receiver.pixels);
+    EXPECT_EQ(finest_grid_of(defaults), 512.0);   // 16 << 5: the claim states the refined beams' finest grid
+    // Where refining cannot widen the regime it is not done: the paper's coarse deviation test, or no fold split.
+    for (const auto& overrides : std::vector<std::map<std::string, std::string>>{{{"deviation", "0.05"}},
+                                                                              {{"fold_split", "false"}}}) {
+        EXPECT_EQ(render(scene, overrides, 64, 2, false).out.health.get("refined_past_focus"), 0);
+        EXPECT_FALSE(claim_at(overrides).inside);
+    }
+}
+
+// Between the reach of 3 levels (0.7 of the way) and 1.2 x the focus, 4 levels (a finest grid of 256, measured
+// to 1.2 x) are enough: `sine` with its floor at 1.0 x its first focus depth gets 4, not 5.
+TEST(AdaptiveBeams, RefinedOnlyAsFarAsTheReceiverNeeds) {
+    Scene scene = test_support::shipped_scene("sine");
+    const regime::WaterRegime w = regime::water_regime(build_frame_geometry(scene, 0));
+    ASSERT_TRUE(w.valid);
+    scene.objects[1].center.z = w.surface_z - 1.0 * w.focus.first_focus_depth;
+    const FrameGeometry frame = build_frame_geometry(scene, 0);
+    const MethodInfo& info = require_method(kMethod);
+    const AccuracyClaim claim = info.create(ParamSet::resolve(info.name, info.params, {}))->accuracy_claim(frame);
+    EXPECT_TRUE(claim.inside) << claim.reason;
+    EXPECT_EQ(finest_grid_of(claim), 256.0);
+    expect_defaults_draw_as(scene, 1, {{"iterations", "4"}});
+}
+
+// The volume view keeps its own levels (volume_iterations 2) when the surfaces are refined: pool_murky, 2.1 x
+// past its focus, draws the same camera_volume with and without fold_iterations.
+TEST(AdaptiveBeams, VolumeViewKeepsItsLevelsWhenTheSurfacesAreRefined) {
+    Scene scene = test_support::shipped_scene("pool_murky");
+    scene.camera.width = 48;
+    scene.camera.height = 36;
+    const Rendered d = render(scene, {}, 32, 2, true);
+    const Rendered off = render(scene, {{"fold_iterations", "0"}}, 32, 2, true);
+    EXPECT_EQ(d.out.health.get("refined_past_focus"), 1);
+    EXPECT_EQ(off.out.health.get("refined_past_focus"), 0);
+    EXPECT_EQ(d.out.camera_volume.pixels, off.out.camera_volume.pixels);
+    EXPECT_NE(d.out.receiver.pixels, off.out.receiver.pixels);
+}
+
+// Before the reach of `iterations` (sine: 0.62 of the way to its first focus) nothing is refined, and the
+// frame is the one fold_iterations 0 draws.
+TEST(AdaptiveBeams, NotRefinedWithinTheReachOfItsLevels) {
+    expect_defaults_draw_as(test_support::shipped_scene("sine"), 0, {{"fold_iterations", "0"}});
+}
+
