@@ -64,10 +64,14 @@ std::string not_refined_because(const regime::WaterRegime& w, const Settings& s,
     return format("grid %.0f: the fold regime's map of 12 x grid would exceed the largest map, %.0f", s.grid, kMaxMap);
 }
 
-Settings refined_settings(const regime::WaterRegime& w, const Settings& s, bool directional_light) {
-    if (!w.valid || !may_refine(s, directional_light)) return s;
+// Whether the frame lies where the fold regime was measured: its depth range and the light's tilt.
+bool in_fold_reach(const regime::WaterRegime& w) {
     const double depth = w.depth_over_first_focus();
-    if (depth < kFoldMinFocusFraction || depth > kFoldMaxFocusFraction || w.tilt_deg > kFoldMaxTiltDeg) return s;
+    return w.valid && depth >= kFoldMinFocusFraction && depth <= kFoldMaxFocusFraction && w.tilt_deg <= kFoldMaxTiltDeg;
+}
+
+Settings refined_settings(const regime::WaterRegime& w, const Settings& s, bool directional_light) {
+    if (!may_refine(s, directional_light) || !in_fold_reach(w)) return s;
     Settings refined = s;
     refined.grid = std::max(s.grid, kFoldMinGrid);
     refined.map = static_cast<int>(kFoldMapPerGrid) * refined.grid;
@@ -88,12 +92,13 @@ AccuracyClaim claim_for(const FrameGeometry& frame, const Settings& base) {
     // keep the default bound, checked on the ball lens's closed form.
     const regime::WaterRegime w = regime::water_regime(frame);
     if (!w.valid) return AccuracyClaim::within(kDefaultClaimError);
-    const Settings s = refined_settings(w, base, directional(frame));
+    const bool directional_light = directional(frame);
+    const Settings s = refined_settings(w, base, directional_light);
     // Two regimes. Before 0.8 x the first focus, nrmse 0.05 from grid 64. Past it, the folds of the ray map
     // need the surface sampled finely and the map's texels well inside a bin (README.md "Past the first
     // focus"): settings that do both are held to 0.10 from 1.1 to 6 x the focus; other settings stay at 0.8.
     const double map_per_grid = static_cast<double>(s.map) / std::max(1, s.grid);
-    const bool fold_settings = fold_resolution(s) && fold_gates(s) && directional(frame);
+    const bool fold_settings = fold_resolution(s) && fold_gates(s) && directional_light;
     const bool folds = fold_settings && w.depth_over_first_focus() > kMaxFocusFraction;
     const double focus_limit = folds ? kFoldMaxFocusFraction : kMaxFocusFraction;
     const double tilt_limit = folds ? kFoldMaxTiltDeg : kMaxTiltDeg;
@@ -134,7 +139,7 @@ AccuracyClaim claim_for(const FrameGeometry& frame, const Settings& base) {
                                 "within 40 deg, and refine_past_focus draws "
                                 "frames there at those settings; this one is not refined: ",
                                 kMaxFocusFraction) +
-                   not_refined_because(w, base, directional(frame));
+                   not_refined_because(w, base, directional_light);
         }
         if (b.quantity == "grid") return format("grid %.0f below the %.0f where the claim was measured", b.value, b.limit);
         if (b.quantity == "map_per_grid")

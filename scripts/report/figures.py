@@ -11,7 +11,7 @@ from matplotlib.colors import LogNorm, Normalize  # noqa: E402
 from matplotlib.ticker import LogFormatter  # noqa: E402
 
 from growth import grid_series, loglog_slope  # noqa: E402
-from load import numeric, ok_runs, read_image, run_images, same_setting, scene_baseline  # noqa: E402
+from load import numeric, ok_runs, read_image, run_images, scene_baseline, with_settings  # noqa: E402
 from pareto import pareto_front  # noqa: E402
 
 MARKERS = "osD^v<>ph*"
@@ -258,11 +258,7 @@ def _chosen_runs(runs, chosen):
     """One run per method: the configuration the spec names, else the lowest-error run."""
     picks = []
     for method, group in runs.groupby("method"):
-        pick = group
-        for key, value in (chosen.get(method) or {}).items():
-            column = f"param.{key}"
-            if column in pick:
-                pick = pick[same_setting(pick[column], value)]
+        pick = with_settings(group, chosen.get(method))
         pick = pick if not pick.empty else group
         picks.append(pick.sort_values("error").iloc[0])
     return picks

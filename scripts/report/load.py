@@ -22,6 +22,16 @@ def same_setting(series, value):
     return series.astype(str).str.strip().str.lower() == str(value).strip().lower()
 
 
+def with_settings(runs, settings):
+    """The runs whose parameter columns hold every one of `settings` (a dict; a key without a column picks
+    nothing out)."""
+    for key, value in (settings or {}).items():
+        column = f"param.{key}"
+        if column in runs:
+            runs = runs[same_setting(runs[column], value)]
+    return runs
+
+
 def numeric(frame, column):
     """The column as numbers (NaN where empty or not a number; all NaN where the column is absent)."""
     if column not in frame:

@@ -6,7 +6,7 @@ import os
 import numpy as np
 
 from growth import growth_rows
-from load import ok_runs, same_setting, scene_baseline
+from load import ok_runs, scene_baseline, with_settings
 
 # Cell marks. A method that does no better than the flat interface has not produced a caustic worth
 # ranking; an interval that includes 0 cannot be told from the truth at this reference's noise.
@@ -43,11 +43,7 @@ def summary_rows(frame, scene, time_budget_ms, error_target, paper_settings):
         best = within.loc[[within["error"].idxmin()]] if not within.empty else None
         reaching = group[group["error"] <= error_target]
         fastest = reaching.loc[[reaching["frame_ms"].idxmin()]] if not reaching.empty else None
-        paper = group
-        for key, value in (paper_settings.get(method) or {}).items():
-            column = f"param.{key}"
-            if column in paper:
-                paper = paper[same_setting(paper[column], value)]
+        paper = with_settings(group, paper_settings.get(method))
         has_paper = bool(paper_settings.get(method)) and not paper.empty
         rows.append({
             "method": label, "runs": str(len(group)),
