@@ -45,6 +45,51 @@ void low_pass(Image& img, const CameraGBuffer& g, int r) {
     });
 }
 
+// The pixels a coverage spans: the area of its parts' projected polygons (parts of a beam cut at a focus
+// may overlap; this is a measure of the beam's cost, not an exact count).
+double covered_pixels(const Coverage& cov) {
+    double area = 0.0;
+    for (int k = 0; k < cov.parts; ++k) {
+        const std::vector<glm::dvec2>& poly = cov.part[static_cast<std::size_t>(k)].poly;
+        double twice = 0.0;
+        for (std::size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) twice += cross2(poly[j], poly[i]);
+        area += 0.5 * std::abs(twice);
+    }
+    return area;
+}
+
+// Culling by contribution (issue lever): a beam's in-scattered power sigma_s Phi w (1 - exp(-sigma_t L)) /
+// sigma_t (its flux times its mean edge transmittance, scattered along its mean edge length L; the phase
+// function and the extinction towards the camera left out) over the pixels its hull spans is the mean
+// radiance it adds where it adds any, up to a common factor. Beams below `fraction` of the largest are
+// dropped from `beams`: the cost of the volume view is the pixels each beam spans, and the faint beams are
+// the wide ones past a focus or at the light's rim. Returns how many were dropped.
+std::int64_t cull_faint_beams(std::vector<VolumeBeam>& beams, const std::vector<const Beam*>& source, double sigma_t,
+                              double fraction) {
+    if (!(fraction > 0.0) || beams.empty()) return 0;
+    std::vector<double> mean_radiance(beams.size());
+    double brightest = 0.0;
+    for (std::size_t k = 0; k < beams.size(); ++k) {
+        const Beam& b = *source[k];
+        double length = 0.0, w = 0.0;
+        for (int i = 0; i < 3; ++i) {
+            length += (b.ye[i] - b.ys[i]) * glm::length(b.dp[i]) / 3.0;
+            w += b.w[i] / 3.0;
+        }
+        const double scattered = sigma_t > 0.0 ? -std::expm1(-sigma_t * length) / sigma_t : length;
+        const double pixels = covered_pixels(*beams[k].pixels);
+        // A hull that spans no pixel costs nothing and adds nothing: kept, and not the brightest.
+        mean_radiance[k] = pixels > 0.0 ? b.flux * w * scattered / std::max(1.0, pixels) : -1.0;
+        brightest = std::max(brightest, mean_radiance[k]);
+    }
+    std::size_t kept = 0;
+    for (std::size_t k = 0; k < beams.size(); ++k)
+        if (mean_radiance[k] < 0.0 || mean_radiance[k] >= fraction * brightest) beams[kept++] = beams[k];
+    const auto culled = static_cast<std::int64_t>(beams.size() - kept);
+    beams.resize(kept);
+    return culled;
+}
+
 }  // namespace
 
 void accumulate_camera(const BeamSet& set, const Scene& scene, const CameraGBuffer& g, const RayTracer* tracer,
@@ -160,8 +205,10 @@ void accumulate_camera(const BeamSet& set, const Scene& scene, const CameraGBuff
     if (want_volume) {
         clock.reset();
         std::vector<VolumeBeam> beams;
+        std::vector<const Beam*> source;
         for (std::size_t n = 0; n < nb; ++n)
-            if (use[n] & 1) beams.push_back({&seen[n], &vol_px[n]});
+            if (use[n] & 1) beams.push_back({&seen[n], &vol_px[n]}), source.push_back(&set.beams[n]);
+        stats.volume_culled += cull_faint_beams(beams, source, cam_medium.extinction(), s.volume.cull);
         VolumeStats vs;
         render_volume(beams, cam, g, tracer, s.volume, *volume, vs);
         stats.fill += vs.fill;

@@ -38,6 +38,7 @@ struct AccumulateStats {
     std::int64_t volume_rays = 0;     // (beam, ray) integrals of the volume view
     std::int64_t volume_refined = 0;  // volume view pixels evaluated in full (the others interpolated)
     std::int64_t volume_edge_pixels = 0;  // refined pixels evaluated again with edge_subpixels^2 rays
+    std::int64_t volume_culled = 0;   // volume beams left out as faint (VolumeSettings::cull)
     std::int64_t coverage_beams = 0;  // beams whose surface caustic was deposited by pixel coverage
     double hulls_ms = 0.0;            // the camera's stages: the beams' pixels (hull scan conversion),
     double surface_ms = 0.0;          // the surface caustics of the camera view,

@@ -45,6 +45,7 @@ public:
         acc_.volume.subpixels = static_cast<int>(p.get_int("volume_subpixels"));
         acc_.volume.edge_subpixels = static_cast<int>(p.get_int("volume_edge_subpixels"));
         acc_.volume.lanes = p.get_bool("volume_lanes");
+        acc_.volume.cull = p.get_float("volume_cull");
         acc_.receiver_samples = static_cast<int>(p.get_int("receiver_samples"));
         acc_.filter = static_cast<int>(p.get_int("filter"));
         acc_.surface_coverage = p.get_enum("camera_surface") == "coverage";
@@ -133,6 +134,7 @@ public:
         out.health.add("volume_rays", stats.volume_rays);
         out.health.add("volume_refined", stats.volume_refined);
         out.health.add("volume_edge_pixels", stats.volume_edge_pixels);
+        out.health.add("volume_culled", stats.volume_culled);
         out.health.add("volume_beams", !request.camera_volume ? 0
                                        : own_volume_set       ? volume_set.stats.beams_generated
                                                               : st.beams_generated);
@@ -158,7 +160,7 @@ private:
     // their memory.
     BeamSet beams_, volume_beams_;
     GridScratch scratch_;
-    int volume_iterations_ = 2;   // the volume view's refinement levels; -1: the surfaces' beams
+    int volume_iterations_ = 1;   // the volume view's refinement levels; -1: the surfaces' beams
     int fold_iterations_ = 5;     // the surfaces' levels past the reach of `iterations` on water (surface_levels)
     AccumulateSettings acc_;
     std::unique_ptr<RayTracer> tracer_;
@@ -177,19 +179,21 @@ MethodInfo method_info() {
                "refuses dispersion and Fresnel reflection off solids.";
     info.radiometric = true;
     info.params = {
-        {"grid", ParamType::Int, "16", 2, 512, {},
-         "initial light-space grid cells per side (the paper: 16; with adaptive=false the uniform grid, the "
-         "paper's comparison is 64)",
+        {"grid", ParamType::Int, "32", 2, 512, {},
+         "initial light-space grid cells per side (the paper: 16 with 3-4 levels; 32 with 2 levels has the same "
+         "finest grid, and its split oracle does not miss sines shorter than two initial cells; with adaptive=false "
+         "the uniform grid, the paper's comparison is 64)",
          {"16", "32"}},
-        {"iterations", ParamType::Int, "3", 0, 6, {},
+        {"iterations", ParamType::Int, "2", 0, 6, {},
          "refinement levels of the split oracle (the paper: 3-4; the surfaces may get more past the focus on water: "
          "fold_iterations); ignored with adaptive=false",
          {"2", "3"}},
         {"fold_iterations", ParamType::Int, "5", 0, 6, {},
          "most refinement levels of the surfaces' beams where the receiver lies beyond the reach of `iterations` "
-         "on a water surface (at the defaults: past 0.7 of the way to its first focus): the fewest that reach it "
-         "(4 to 1.2 x the focus, 5 to 6 x); 0 or <= iterations: `iterations` throughout"},
-        {"volume_iterations", ParamType::Int, "2", -1, 6, {},
+         "on a water surface (at the defaults: past 0.7 of the way to its first focus): the fewest that keep the "
+         "drawn cases within 0.05 (finest grid 256 to 1.0 x the focus, 512 to 3 x, 1024 to 6 x), else the fewest "
+         "within the 0.10 claim; 0 or <= iterations: `iterations` throughout"},
+        {"volume_iterations", ParamType::Int, "1", -1, 6, {},
          "camera_volume: refinement levels of the beams the volume view integrates, when fewer than the "
          "surfaces' (a second, coarser beam set; the surfaces keep theirs); -1: the same beams as the surfaces "
          "(refined past the focus too, see fold_iterations)"},
@@ -242,6 +246,9 @@ MethodInfo method_info() {
         {"volume_lanes", ParamType::Bool, "true", 0, 0, {},
          "evaluate the volume view's ray-beam integrals four rays at a time in AVX2 lanes where the CPU has AVX2 "
          "(the same values to the bit; false: one ray at a time, for timing comparisons)"},
+        {"volume_cull", ParamType::Float, "0", 0.0, 1.0, {},
+         "camera_volume: leave out the beams whose mean radiance over their hull (in-scattered power over the pixels "
+         "it spans) is below this fraction of the brightest beam's (0: none; README, \"Culling faint beams\")"},
         {"receiver_samples", ParamType::Int, "3", 1, 8, {},
          "point-in-beam samples per side of each receiver bin (their mean is the bin's mean irradiance)"},
         {"camera_surface", ParamType::Enum, "coverage", 0, 0, {"coverage", "point"},

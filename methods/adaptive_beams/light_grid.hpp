@@ -45,8 +45,8 @@ struct LightPath {
 };
 
 struct GridSettings {
-    int grid = 16;                   // initial cells per side
-    int iterations = 3;              // refinement levels
+    int grid = 32;                   // initial cells per side
+    int iterations = 2;              // refinement levels
     bool adaptive = true;            // false: the uniform grid x grid (no refinement)
     double depth_threshold = 2.0;    // split: depth jump across a cell > this x its width
     double normal_threshold_deg = 15.0;   // split: corner normals further apart than this

@@ -4,7 +4,9 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -14,6 +16,8 @@
 #include <caustics/reference/analytic_truth.hpp>
 #include "adaptive_beams_render.hpp"
 #include "conformance_cases.hpp"
+#include "conformance_drawn.hpp"
+#include "conformance_judge.hpp"
 #include "method_support.hpp"
 #include "sine_truth_support.hpp"
 
@@ -41,8 +45,9 @@ void expect_defaults_draw_as(const Scene& scene, int refined, const std::map<std
 
 // Past the first focus the folds of the ray map lie inside the beams that cross them: a finest adaptive grid
 // of 512 with fold_split is claimed to 0.10 up to 6 x the first focus (600 drawn cases of three seeds, worst
-// 0.084). A sine 2.25 x its focus down under 20 deg light, against the exact truth: inside and met at 5
-// levels; at 4 (finest 256, claimed to 1.2 x) outside, the reason naming what reaches 6 x.
+// 0.084). A sine 2.25 x its focus down under 20 deg light, against the exact truth: inside and met at a finest
+// grid of 512 (the defaults' grid 32 with 4 levels); at 256 (claimed to 1.2 x) outside, the reason naming what
+// reaches 6 x.
 TEST(AdaptiveBeams, PastTheFocusClaimedAtAFinestGridOf512) {
     test_support::SineSetup c = test_support::sine_case(20.0, -1.2, 0.2, false);
     c.cell = 0.002;
@@ -60,30 +65,33 @@ TEST(AdaptiveBeams, PastTheFocusClaimedAtAFinestGridOf512) {
     auto claim_at = [&](const std::map<std::string, std::string>& overrides) {
         return info.create(ParamSet::resolve(info.name, info.params, overrides))->accuracy_claim(frame);
     };
-    const AccuracyClaim four = claim_at({{"iterations", "4"}, {"fold_iterations", "0"}});
-    EXPECT_FALSE(four.inside);
-    EXPECT_NE(four.reason.find("6 x needs a finest adaptive grid of 512"), std::string::npos) << four.reason;
-    // Neither without fold_split nor from a coarser initial grid (8, 6 levels): not measured.
-    EXPECT_FALSE(claim_at({{"iterations", "5"}, {"fold_split", "false"}}).inside);
+    const AccuracyClaim at256 = claim_at({{"iterations", "3"}, {"fold_iterations", "0"}});
+    EXPECT_FALSE(at256.inside);
+    EXPECT_NE(at256.reason.find("6 x needs a finest adaptive grid of 512"), std::string::npos) << at256.reason;
+    // Neither without fold_split nor from a coarser initial grid (8, 6 levels): not measured. From the paper's
+    // grid 16 with 5 levels it is.
+    EXPECT_FALSE(claim_at({{"iterations", "4"}, {"fold_split", "false"}}).inside);
     EXPECT_FALSE(claim_at({{"iterations", "6"}, {"grid", "8"}}).inside);
-    const AccuracyClaim five = claim_at({{"iterations", "5"}});
-    ASSERT_TRUE(five.inside) << five.reason;
-    const Rendered r = render(scene, {{"iterations", "5"}}, kBins, 2, false);
+    EXPECT_TRUE(claim_at({{"iterations", "5"}, {"grid", "16"}}).inside);
+    const AccuracyClaim at512 = claim_at({{"iterations", "4"}});
+    ASSERT_TRUE(at512.inside) << at512.reason;
+    const Rendered r = render(scene, {{"iterations", "4"}}, kBins, 2, false);
     const double e = nrmse(r.out.receiver, truth.receiver);
-    const double e3 = nrmse(render(scene, {{"fold_iterations", "0"}}, kBins, 2, false).out.receiver, truth.receiver);
-    std::printf("sine 2.25 x its first focus, 20 deg: nrmse 3 levels %.4f, 5 levels %.4f, baseline %.4f\n", e3, e, baseline);
-    EXPECT_LT(e, five.bound(baseline));
-    EXPECT_GT(e3, five.bound(baseline));   // why 3 levels (finest 128) alone call it outside
+    const double e128 = nrmse(render(scene, {{"fold_iterations", "0"}}, kBins, 2, false).out.receiver, truth.receiver);
+    std::printf("sine 2.25 x its first focus, 20 deg: nrmse at a finest grid of 128 %.4f, 512 %.4f, baseline %.4f\n",
+                e128, e, baseline);
+    EXPECT_LT(e, at512.bound(baseline));
+    EXPECT_GT(e128, at512.bound(baseline));   // why the defaults' 2 levels (finest 128) alone call it outside
     EXPECT_FALSE(claim_at({{"fold_iterations", "0"}}).inside);
-    // At the defaults the surfaces' beams get fold_iterations (5) levels here: the same beams as iterations 5,
-    // and the claim says so.
+    // At the defaults the surfaces' beams get the levels that reach 2.25 x within the 0.05 aim (finest 512: 4),
+    // the same beams as iterations 4, and the claim says so.
     const AccuracyClaim defaults = claim_at({});
     EXPECT_TRUE(defaults.inside) << defaults.reason;
     const Rendered d = render(scene, {}, kBins, 2, false);
     EXPECT_EQ(d.out.health.get("refined_past_focus"), 1);
     EXPECT_EQ(r.out.health.get("refined_past_focus"), 0);
     EXPECT_EQ(d.out.receiver.pixels, r.out.receiver.pixels);
-    EXPECT_EQ(finest_grid_of(defaults), 512.0);   // 16 << 5: the claim states the refined beams' finest grid
+    EXPECT_EQ(finest_grid_of(defaults), 512.0);   // 32 << 4: the claim states the refined beams' finest grid
     // Where refining cannot widen the regime it is not done: the paper's coarse deviation test, or no fold split.
     for (const auto& overrides : std::vector<std::map<std::string, std::string>>{{{"deviation", "0.05"}},
                                                                               {{"fold_split", "false"}}}) {
@@ -92,22 +100,28 @@ TEST(AdaptiveBeams, PastTheFocusClaimedAtAFinestGridOf512) {
     }
 }
 
-// Between the reach of 3 levels (0.7 of the way) and 1.2 x the focus, 4 levels (a finest grid of 256, measured
-// to 1.2 x) are enough: `sine` with its floor at 1.0 x its first focus depth gets 4, not 5.
+// The surfaces get the fewest levels that kept the drawn cases within 0.05 (claim.cpp): a finest grid of 256
+// up to 1.0 x the focus, 512 up to 3 x, 1024 up to 6 x. `sine` with its floor at 0.9 x its first focus depth
+// gets 256 (3 levels from 32), at 2 x 512, at 4 x 1024 (claimed only: that frame takes about a second); past
+// 6 x nothing is measured and the frame keeps its 2 levels, outside the claim.
 TEST(AdaptiveBeams, RefinedOnlyAsFarAsTheReceiverNeeds) {
     Scene scene = test_support::shipped_scene("sine");
     const regime::WaterRegime w = regime::water_regime(build_frame_geometry(scene, 0));
     ASSERT_TRUE(w.valid);
-    scene.objects[1].center.z = w.surface_z - 1.0 * w.focus.first_focus_depth;
-    const FrameGeometry frame = build_frame_geometry(scene, 0);
     const MethodInfo& info = require_method(kMethod);
-    const AccuracyClaim claim = info.create(ParamSet::resolve(info.name, info.params, {}))->accuracy_claim(frame);
-    EXPECT_TRUE(claim.inside) << claim.reason;
-    EXPECT_EQ(finest_grid_of(claim), 256.0);
-    expect_defaults_draw_as(scene, 1, {{"iterations", "4"}});
+    const std::unique_ptr<Method> method = info.create(ParamSet::resolve(info.name, info.params, {}));
+    for (const auto& [ratio, finest] : std::vector<std::pair<double, double>>{{0.9, 256}, {2.0, 512}, {4.0, 1024}, {7.0, 128}}) {
+        scene.objects[1].center.z = w.surface_z - ratio * w.focus.first_focus_depth;
+        const FrameGeometry frame = build_frame_geometry(scene, 0);
+        const AccuracyClaim claim = method->accuracy_claim(frame);
+        EXPECT_EQ(claim.inside, ratio < 6.0) << ratio << ": " << claim.reason;
+        EXPECT_EQ(finest_grid_of(claim), finest) << ratio;
+    }
+    scene.objects[1].center.z = w.surface_z - 0.9 * w.focus.first_focus_depth;
+    expect_defaults_draw_as(scene, 1, {{"iterations", "3"}});
 }
 
-// The volume view keeps its own levels (volume_iterations 2) when the surfaces are refined: pool_murky, 2.1 x
+// The volume view keeps its own levels (volume_iterations 1) when the surfaces are refined: pool_murky, 2.1 x
 // past its focus, draws the same camera_volume with and without fold_iterations.
 TEST(AdaptiveBeams, VolumeViewKeepsItsLevelsWhenTheSurfacesAreRefined) {
     Scene scene = test_support::shipped_scene("pool_murky");
@@ -127,3 +141,22 @@ TEST(AdaptiveBeams, NotRefinedWithinTheReachOfItsLevels) {
     expect_defaults_draw_as(test_support::shipped_scene("sine"), 0, {{"fold_iterations", "0"}});
 }
 
+
+// The surfaces' aim at the defaults: within 0.05 of the exact truth on drawn cases (the suite's draws of the
+// default seed, 256 x 256 bins), its first 12 and the seven of its first 200 that missed 0.05 before the
+// initial grid was 32 and the levels aimed at 0.05 (0.052 to 0.074: sines of wavelength 0.17 to 0.22 m, from
+// 0.66 to 5.7 x their first focus). Over 1,000 cases of five seeds the worst was 0.047 (README).
+TEST(AdaptiveBeams, SurfacesWithinTheAimOnDrawnCases) {
+    const MethodInfo& info = require_method(kMethod);
+    std::vector<int> indices;
+    for (int i = 0; i < 12; ++i) indices.push_back(i);
+    for (int i : {26, 47, 77, 140, 152, 159, 179}) indices.push_back(i);
+    for (const int i : indices) {
+        const test_support::DrawnCase c = test_support::drawn_case(test_support::kDefaultConformanceSeed, i);
+        const test_support::JudgedRow row = test_support::judge_case(info, c.name, c.scene, false, false);
+        ASSERT_FALSE(row.refused) << c.name;
+        std::printf("%s (%s): nrmse %.4f\n", c.name.c_str(), c.what.c_str(), row.error);
+        EXPECT_TRUE(row.inside) << c.name << ": " << row.stated.reason;
+        EXPECT_LE(row.error, 0.05) << c.name << " (" << c.what << ")";
+    }
+}
