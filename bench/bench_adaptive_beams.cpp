@@ -9,7 +9,7 @@
 // (volume_step, volume_subpixels: 1, 1 is the paper's one ray per pixel centre, 2, 2 the defaults);
 // BM_OracleAndSurface compares the split oracle and camera surface settings with the former defaults;
 // BM_VolumeLanes the volume view's integrals in AVX2 lanes (1) against one ray at a time (0); BM_VolumeCull
-// culling faint volume beams (volume_cull);
+// culling faint volume beams (volume_cull); BM_VolumePareto points of the volume view's time-vs-error front;
 // BM_HeapPolicy times the defaults under glibc's default heap limits (0: a fresh process's, before the
 // adaptation util/heap_policy.hpp describes) and under the program's policy (1); BM_IntegralFloor the
 // arithmetic of one ray-beam integral on this CPU at its throughput (the volume view's idealised bound).
@@ -122,6 +122,14 @@ void BM_VolumeBeams(benchmark::State& state) {
 // same values to the bit.
 void BM_VolumeLanes(benchmark::State& state) {
     run(state, {{"volume_lanes", state.range(2) ? "true" : "false"}});
+}
+
+// Points of the volume view's time-vs-error front at the scene cameras (scripts/sweeps/volume_pareto.json),
+// third argument: 0 the former defaults (two Gauss points per interval), 1 the defaults (the paper's midpoint,
+// volume_samples 1), 2 the same on the volume's unrefined beams (volume_iterations 0).
+void BM_VolumePareto(benchmark::State& state) {
+    const int v = static_cast<int>(state.range(2));
+    run(state, {{"volume_samples", v == 0 ? "2" : "1"}, {"volume_iterations", v == 2 ? "0" : "1"}});
 }
 
 // Culling faint volume beams (third argument: volume_cull in thousandths; 0 none, the default).
@@ -239,6 +247,7 @@ void BM_IntegralFloor(benchmark::State& state) {
 BENCHMARK(BM_IntegralFloor)->ArgsProduct({{0, 2}, {0, 1}})->Repetitions(5)->ReportAggregatesOnly(true);
 #endif
 BENCHMARK(BM_VolumeBeams)->ArgsProduct({{0, 1}, {2}, {-1, 2, 1}})->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true)->UseRealTime();
+BENCHMARK(BM_VolumePareto)->ArgsProduct({{0, 1}, {2}, {0, 1, 2}})->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true)->UseRealTime();
 BENCHMARK(BM_VolumeCull)->ArgsProduct({{0, 1}, {2}, {0, 10, 100}})->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true)->UseRealTime();
 BENCHMARK(BM_VolumeLanes)->ArgsProduct({{0, 1}, {1, 2}, {0, 1}})->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true)->UseRealTime();
 BENCHMARK(BM_HeapPolicy)->ArgsProduct({{0, 1}, {2}, {0, 1}})->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true)->UseRealTime();

@@ -247,19 +247,7 @@ void accumulate_receiver(const BeamSet& set, const Scene& scene, const ReceiverC
         glm::dvec3 ends[3];
         double lengths[3];
         bool ok = true;
-        for (int i = 0; i < 3; ++i) {
-            const double stretch = glm::length(b.dp[i]);
-            ends[i] = b.point(i, b.ye[i]);
-            lengths[i] = (b.ye[i] - b.ys[i]) * stretch;
-            if (!all) {
-                const glm::dvec3 start = b.point(i, b.ys[i]), d = b.dp[i] / stretch;
-                const double dn = glm::dot(d, plane_n);
-                const double t = dn != 0.0 ? glm::dot(plane_p - start, plane_n) / dn : -1.0;
-                if (!(t > 0.0)) ok = false;
-                ends[i] = start + t * d;
-                lengths[i] = t;
-            }
-        }
+        for (int i = 0; i < 3; ++i) ok = edge_end_on_plane(b, i, plane_p, plane_n, !all, ends[i], lengths[i]) && ok;
         if (!ok) continue;
         deposited[n] = 1;
         const auto base = static_cast<unsigned>(positions.size());

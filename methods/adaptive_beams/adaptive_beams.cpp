@@ -227,8 +227,9 @@ MethodInfo method_info() {
         {"energy_cutoff", ParamType::Float, "0.001", 0.0, 1.0, {},
          "beams are extruded until their flux density (divergence and extinction) falls below this fraction of "
          "its start value"},
-        {"volume_samples", ParamType::Int, "2", 1, 4, {},
-         "Gauss-Legendre points per exact ray-beam interval (1: the paper's single midpoint sample)"},
+        {"volume_samples", ParamType::Int, "1", 1, 4, {},
+         "Gauss-Legendre points per exact ray-beam interval (1: the paper's single midpoint sample; 2 changed "
+         "sphere_fog's camera_volume error by 0.5 %, within the reference's interval, for 8 % more frame time)"},
         {"volume_step", ParamType::Int, "2", 1, 16, {},
          "camera_volume: node spacing [pixels]; pixels between nodes are interpolated bilinearly where the block "
          "is smooth (1: every pixel evaluated, the paper)",

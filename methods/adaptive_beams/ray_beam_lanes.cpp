@@ -61,23 +61,6 @@ CAUSTICS_LANES inline void roots_lanes(__m256d a, __m256d b, __m256d c, __m256d&
     r1 = select(_mm256_or_pd(none, linear), nan, q1);
 }
 
-// Sorts v[0..n) (n = 6 or 8) ascending in every lane: the optimal networks of 12 and 19 comparators
-// (Knuth, TAOCP vol. 3, 5.3.4). Values are never NaN here.
-CAUSTICS_LANES inline void sort_ends(__m256d* v, int n) {
-    auto cmp = [v](int a, int b) CAUSTICS_LANES {
-        const __m256d lo = _mm256_min_pd(v[a], v[b]), hi = _mm256_max_pd(v[a], v[b]);
-        v[a] = lo, v[b] = hi;
-    };
-    if (n == 6) {
-        static constexpr int net[12][2] = {{1, 2}, {4, 5}, {0, 2}, {3, 5}, {0, 1}, {3, 4}, {2, 5}, {0, 3}, {1, 4}, {2, 4}, {1, 3}, {2, 3}};
-        for (const auto& p : net) cmp(p[0], p[1]);
-    } else {
-        static constexpr int net[19][2] = {{0, 1}, {2, 3}, {4, 5}, {6, 7}, {0, 2}, {1, 3}, {4, 6}, {5, 7}, {1, 2}, {5, 6},
-                                           {0, 4}, {3, 7}, {1, 5}, {2, 6}, {1, 4}, {3, 6}, {2, 4}, {3, 5}, {3, 4}};
-        for (const auto& p : net) cmp(p[0], p[1]);
-    }
-}
-
 }  // namespace
 
 CAUSTICS_LANES void RayBeam::radiance_avx2(const glm::dvec3* w, const double* s_max, int n, int samples,
@@ -188,41 +171,23 @@ CAUSTICS_LANES void RayBeam::radiance_avx2(const glm::dvec3* w, const double* s_
             _mm256_store_pd(roots[7], r1);
         }
         const int nroots = flipped_ ? 8 : 6;
-        // The sub-intervals' ends in lanes: a root strictly inside (lo, hi) stays, any other (NaN included)
-        // becomes hi, and a sorting network orders them; the nonzero intervals between consecutive ends are
-        // then the one-ray form's, in its order (a root moved to hi only adds empty intervals at the end).
-        const __m256d vlo = _mm256_load_pd(lo), vhi = _mm256_load_pd(hi);
-        __m256d c[8];
-        for (int r = 0; r < nroots; ++r) {
-            const __m256d v = _mm256_load_pd(roots[r]);
-            c[r] = select(_mm256_and_pd(gt(v, vlo), lt(v, vhi)), v, vhi);
-        }
-        sort_ends(c, nroots);
-        // Interval k runs from end k to end k + 1 (end 0 = lo, ends 1..nroots the sorted roots, then hi); its
-        // midpoint's edge functions decide whether the ray is inside there.
-        alignas(32) double mid_k[9][4], half_k[9][4];
-        int inside_bits[9];
-        const __m256d open = gt(vhi, vlo);
-        for (int k = 0; k <= nroots; ++k) {
-            const __m256d a = k == 0 ? vlo : c[k - 1], b = k == nroots ? vhi : c[k];
-            const __m256d half = _mm256_mul_pd(splat(0.5), _mm256_sub_pd(b, a));
-            const __m256d mid = _mm256_mul_pd(splat(0.5), _mm256_add_pd(a, b));
-            __m256d F[3];
-            for (int e = 0; e < 3; ++e) F[e] = _mm256_add_pd(splat(f0_[e]), _mm256_mul_pd(mid, _mm256_add_pd(g1[e], _mm256_mul_pd(mid, g2[e]))));
-            const __m256d a2 = _mm256_add_pd(_mm256_add_pd(F[0], F[1]), F[2]);
-            const __m256d pos = _mm256_and_pd(_mm256_and_pd(ge(F[0], zero), ge(F[1], zero)), ge(F[2], zero));
-            const __m256d neg = _mm256_and_pd(_mm256_and_pd(le(F[0], zero), le(F[1], zero)), le(F[2], zero));
-            const __m256d inside = _mm256_or_pd(_mm256_and_pd(gt(a2, zero), pos), _mm256_and_pd(lt(a2, zero), neg));
-            inside_bits[k] = _mm256_movemask_pd(_mm256_and_pd(_mm256_and_pd(open, gt(b, a)), inside));
-            _mm256_store_pd(mid_k[k], mid);
-            _mm256_store_pd(half_k[k], half);
-        }
         for (int l = 0; l < lanes; ++l) {
             const int j = j0 + l;
             out[j] = 0.0;
-            for (int k = 0; k <= nroots; ++k) {
-                if (!(inside_bits[k] >> l & 1)) continue;
-                const double half = half_k[k][l], mid = mid_k[k][l];
+            const double s_lo = lo[l], s_hi = hi[l];
+            if (!(s_hi > s_lo)) continue;
+            double cand[10];
+            int nc = 1;
+            cand[0] = s_lo;
+            for (int r = 0; r < nroots; ++r) insert_interval_end(roots[r][l], s_lo, s_hi, cand, nc);
+            cand[nc++] = s_hi;
+            for (int k = 0; k + 1 < nc; ++k) {
+                const double a = cand[k], b = cand[k + 1];
+                if (!(b > a)) continue;
+                const double half = 0.5 * (b - a), mid = 0.5 * (a + b);
+                double F[3];
+                for (int e = 0; e < 3; ++e) F[e] = f0_[e] + mid * (f1[e][l] + mid * f2[e][l]);
+                if (!inside_section(F, F[0] + F[1] + F[2])) continue;
                 for (int i = 0; i < gq.n; ++i) {
                     ps[pending] = mid + half * gq.x[i];
                     pwt[pending] = gq.w[i] * half;

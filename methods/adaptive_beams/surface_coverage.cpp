@@ -18,6 +18,22 @@ struct PlaneBatch {
 
 }  // namespace
 
+bool edge_end_on_plane(const Beam& b, int i, const glm::dvec3& p, const glm::dvec3& n, bool extend, glm::dvec3& end,
+                       double& length) {
+    const double stretch = glm::length(b.dp[i]);
+    if (!extend) {
+        end = b.point(i, b.ye[i]);
+        length = (b.ye[i] - b.ys[i]) * stretch;
+        return true;
+    }
+    const glm::dvec3 start = b.point(i, b.ys[i]), d = b.dp[i] / stretch;
+    const double dn = glm::dot(d, n);
+    const double t = dn != 0.0 ? glm::dot(p - start, n) / dn : -1.0;
+    end = start + t * d;
+    length = t;
+    return t > 0.0;
+}
+
 std::vector<std::uint8_t> deposit_plane_beams(const BeamSet& set, const Scene& scene, const CameraGBuffer& g,
                                               const CameraModel& cam, Image& surface, std::int64_t& deposited) {
     const std::size_t nb = set.beams.size();
@@ -27,9 +43,18 @@ std::vector<std::uint8_t> deposit_plane_beams(const BeamSet& set, const Scene& s
     // reaches behind the camera's near region): the raster would clip them, but their screen area is no
     // measure of the section's.
     const double far_out = 16.0 * std::max(g.width, g.height);
+    const int receiver = scene.receiver.object_index;
+    const bool plane_receiver = receiver >= 0 && scene.objects[static_cast<std::size_t>(receiver)].shape == ShapeType::Plane;
     for (std::size_t n = 0; n < nb; ++n) {
-        const int object = set.end_object[n];
-        if (object < 0 || !(set.ends[n] & kEndsOnDiffuse)) continue;
+        int object = set.end_object[n];
+        const std::uint8_t e = set.ends[n];
+        // Edges that end on the plane receiver or on nothing may be carried on to its plane: where some leave
+        // the receiver's edge, and where the energy cut ended them short of it (their light there is faint,
+        // and drawing it costs less than testing every pixel of their wide sections point by point).
+        const bool extendable = plane_receiver && (e & kEndsOnReceiver) && (e & kReceiverOrNothing);
+        bool extend = object < 0 && extendable;
+        if (extend) object = receiver;
+        if (object < 0 || !(e & kEndsOnDiffuse)) continue;
         const Object& plane = scene.objects[static_cast<std::size_t>(object)];
         if (plane.shape != ShapeType::Plane) continue;
         const Beam& b = set.beams[n];
@@ -37,16 +62,24 @@ std::vector<std::uint8_t> deposit_plane_beams(const BeamSet& set, const Scene& s
         const double sigma_t = medium_at(scene, b.medium).extinction();
         glm::dvec3 ends[3];
         double px[3], py[3], arriving = 0.0;
-        bool ok = true;
-        for (int i = 0; i < 3 && ok; ++i) {
-            const double stretch = glm::length(b.dp[i]);
-            ends[i] = b.point(i, b.ye[i]);
-            // An edge cut short by the energy cutoff does not end on the plane, whatever its path's end. The
-            // tolerance is relative to the coordinates and the edge's length: the hits are single precision.
-            const double scale = 1.0 + glm::length(ends[i] - plane.center) + (b.ye[i] - b.ys[i]) * stretch;
-            ok = std::abs(glm::dot(ends[i] - plane.center, np)) <= 1e-5 * scale &&
-                 cam.project(ends[i], px[i], py[i]) && std::abs(px[i]) < far_out && std::abs(py[i]) < far_out;
-            arriving += b.w[i] * std::exp(-sigma_t * (b.ye[i] - b.ys[i]) * stretch) / 3.0;
+        bool ok = false;
+        for (int attempt = 0; attempt < 2 && !ok; ++attempt) {
+            if (attempt == 1) {
+                if (extend || !extendable || object != receiver) break;
+                extend = true;
+            }
+            ok = true;
+            arriving = 0.0;
+            for (int i = 0; i < 3 && ok; ++i) {
+                double length = 0.0;
+                ok = edge_end_on_plane(b, i, plane.center, np, extend, ends[i], length);
+                // An edge cut short by the energy cutoff does not end on the plane, whatever its path's end. The
+                // tolerance is relative to the coordinates and the edge's length: the hits are single precision.
+                const double scale = 1.0 + glm::length(ends[i] - plane.center) + length;
+                ok = ok && std::abs(glm::dot(ends[i] - plane.center, np)) <= 1e-5 * scale &&
+                     cam.project(ends[i], px[i], py[i]) && std::abs(px[i]) < far_out && std::abs(py[i]) < far_out;
+                arriving += b.w[i] * std::exp(-sigma_t * length) / 3.0;
+            }
         }
         if (!ok) continue;
         taken[n] = 1;

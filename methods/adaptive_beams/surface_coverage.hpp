@@ -8,8 +8,11 @@
 // than a pixel still brings its whole flux, where the paper's point-in-beam at pixel centres (Sec. 5.3)
 // hits or misses it and then low-pass filters the result (Sec. 7); the receiver map does the same on its
 // chart (accumulate.cpp). A pixel takes a triangle's light only where it sees the same plane (a plane
-// cannot hide part of itself, so the pixel sees the triangle's point); beams whose edges end on different
-// surfaces, on curved ones, or behind the camera are left to the point-in-beam pass.
+// cannot hide part of itself, so the pixel sees the triangle's point). A beam that leaves the edge of a plane
+// receiver (each edge ends on it or on nothing) is taken too, its edges extended to the receiver's plane as
+// the receiver map extends them: the part of its section beyond the receiver's edge falls on pixels that do
+// not see the receiver. Beams whose edges end on different surfaces, on curved ones, or behind the camera are
+// left to the point-in-beam pass.
 #include <cstdint>
 #include <vector>
 
@@ -19,6 +22,12 @@
 #include "light_grid.hpp"
 
 namespace caustics::adaptive_beams {
+
+// Where edge i of `b` meets the plane through p with normal n, and the length of its path there: its own end
+// where `extend` is false (the edge ends on the plane), else its line carried on to the plane. False where an
+// extended edge meets the plane only behind its start (or never).
+bool edge_end_on_plane(const Beam& b, int i, const glm::dvec3& p, const glm::dvec3& n, bool extend, glm::dvec3& end,
+                       double& length);
 
 // Adds the box-filtered irradiance of the beams it takes to `surface` (covered pixels of their plane), adds
 // the number it deposited to `deposited`, and returns, per beam, 1 where it took the beam (the point-in-beam

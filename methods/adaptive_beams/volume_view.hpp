@@ -33,7 +33,7 @@
 namespace caustics::adaptive_beams {
 
 struct VolumeSettings {
-    int samples = 2;       // Gauss-Legendre points per ray-beam interval (1: the paper's midpoint)
+    int samples = 1;       // Gauss-Legendre points per ray-beam interval (1: the paper's midpoint)
     int step = 2;          // node spacing [pixels]
     double refine = 1.0;   // a block whose nodes differ by more than this fraction of their mean is refined
     int subpixels = 2;     // rays per side of a refined pixel
