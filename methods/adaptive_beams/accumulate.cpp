@@ -45,12 +45,38 @@ void low_pass(Image& img, const CameraGBuffer& g, int r) {
     });
 }
 
-// The pixels a coverage spans: the area of its parts' projected polygons (parts of a beam cut at a focus
-// may overlap; this is a measure of the beam's cost, not an exact count).
-double covered_pixels(const Coverage& cov) {
+// The image area a coverage spans [pixels]: its parts' projected polygons clipped to the W x H image (parts of a
+// beam cut at a focus may overlap: a measure of the beam's cost, not an exact count).
+double covered_pixels(const Coverage& cov, int W, int H) {
     double area = 0.0;
+    std::vector<glm::dvec2> poly, next;
     for (int k = 0; k < cov.parts; ++k) {
-        const std::vector<glm::dvec2>& poly = cov.part[static_cast<std::size_t>(k)].poly;
+        poly = cov.part[static_cast<std::size_t>(k)].poly;
+        // Sutherland-Hodgman against x >= 0, x <= W, y >= 0, y <= H.
+        for (int side = 0; side < 4 && !poly.empty(); ++side) {
+            auto inside = [&](const glm::dvec2& q) {
+                return side == 0 ? q.x >= 0.0 : side == 1 ? q.x <= W : side == 2 ? q.y >= 0.0 : q.y <= H;
+            };
+            auto cut = [&](const glm::dvec2& a, const glm::dvec2& b) {
+                const double t = side == 0   ? (0.0 - a.x) / (b.x - a.x)
+                                 : side == 1 ? (W - a.x) / (b.x - a.x)
+                                 : side == 2 ? (0.0 - a.y) / (b.y - a.y)
+                                             : (H - a.y) / (b.y - a.y);
+                return a + t * (b - a);
+            };
+            next.clear();
+            for (std::size_t i = 0; i < poly.size(); ++i) {
+                const glm::dvec2& a = poly[i];
+                const glm::dvec2& b = poly[(i + 1) % poly.size()];
+                if (inside(a)) {
+                    next.push_back(a);
+                    if (!inside(b)) next.push_back(cut(a, b));
+                } else if (inside(b)) {
+                    next.push_back(cut(a, b));
+                }
+            }
+            poly.swap(next);
+        }
         double twice = 0.0;
         for (std::size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) twice += cross2(poly[j], poly[i]);
         area += 0.5 * std::abs(twice);
@@ -60,27 +86,41 @@ double covered_pixels(const Coverage& cov) {
 
 // Culling by contribution (issue lever): a beam's in-scattered power sigma_s Phi w (1 - exp(-sigma_t L)) /
 // sigma_t (its flux times its mean edge transmittance, scattered along its mean edge length L; the phase
-// function and the extinction towards the camera left out) over the pixels its hull spans is the mean
-// radiance it adds where it adds any, up to a common factor. Beams below `fraction` of the largest are
-// dropped from `beams`: the cost of the volume view is the pixels each beam spans, and the faint beams are
-// the wide ones past a focus or at the light's rim. Returns how many were dropped.
+// function and the extinction towards the camera left out) is an intensity towards the camera that spreads
+// over the beam's projected area, pixels x d^2 x the pixel's solid angle at its distance d: the mean radiance
+// it adds where it adds any is that power over pixels x d^2, up to a factor common to all beams. Beams below
+// `fraction` of the largest are dropped from `beams`: the cost of the volume view is the pixels each beam
+// spans. Beams in no pixel of the image (nothing to cost or add) and beams whose measure is not finite are
+// kept and set no scale. Returns how many were dropped.
 std::int64_t cull_faint_beams(std::vector<VolumeBeam>& beams, const std::vector<const Beam*>& source, double sigma_t,
-                              double fraction) {
+                              const glm::dvec3& eye, int W, int H, double fraction) {
     if (!(fraction > 0.0) || beams.empty()) return 0;
     std::vector<double> mean_radiance(beams.size());
     double brightest = 0.0;
     for (std::size_t k = 0; k < beams.size(); ++k) {
         const Beam& b = *source[k];
         double length = 0.0, w = 0.0;
+        glm::dvec3 centre(0.0);
         for (int i = 0; i < 3; ++i) {
             length += (b.ye[i] - b.ys[i]) * glm::length(b.dp[i]) / 3.0;
             w += b.w[i] / 3.0;
+            centre += b.point(i, 0.5 * (b.ys[i] + b.ye[i])) / 3.0;
         }
         const double scattered = sigma_t > 0.0 ? -std::expm1(-sigma_t * length) / sigma_t : length;
-        const double pixels = covered_pixels(*beams[k].pixels);
-        // A hull that spans no pixel costs nothing and adds nothing: kept, and not the brightest.
-        mean_radiance[k] = pixels > 0.0 ? b.flux * w * scattered / std::max(1.0, pixels) : -1.0;
-        brightest = std::max(brightest, mean_radiance[k]);
+        const double pixels = covered_pixels(*beams[k].pixels, W, H);
+        const double d2 = glm::dot(centre - eye, centre - eye);
+        const double r = b.flux * w * scattered / (std::max(1.0, pixels) * d2);
+        mean_radiance[k] = pixels > 0.0 && std::isfinite(r) ? r : -1.0;
+    }
+    // The scale: the 99th percentile of the beams' measures (a few beams that pass next to the camera, whose d
+    // is small, would otherwise set it alone).
+    std::vector<double> sorted;
+    for (double r : mean_radiance)
+        if (r >= 0.0) sorted.push_back(r);
+    if (!sorted.empty()) {
+        const auto at = sorted.begin() + static_cast<std::ptrdiff_t>(0.99 * static_cast<double>(sorted.size() - 1));
+        std::nth_element(sorted.begin(), at, sorted.end());
+        brightest = *at;
     }
     std::size_t kept = 0;
     for (std::size_t k = 0; k < beams.size(); ++k)
@@ -208,7 +248,8 @@ void accumulate_camera(const BeamSet& set, const Scene& scene, const CameraGBuff
         std::vector<const Beam*> source;
         for (std::size_t n = 0; n < nb; ++n)
             if (use[n] & 1) beams.push_back({&seen[n], &vol_px[n]}), source.push_back(&set.beams[n]);
-        stats.volume_culled += cull_faint_beams(beams, source, cam_medium.extinction(), s.volume.cull);
+        stats.volume_culled += cull_faint_beams(beams, source, cam_medium.extinction(), cam.position, g.width, g.height,
+                                                s.volume.cull);
         VolumeStats vs;
         render_volume(beams, cam, g, tracer, s.volume, *volume, vs);
         stats.fill += vs.fill;
@@ -247,7 +288,8 @@ void accumulate_receiver(const BeamSet& set, const Scene& scene, const ReceiverC
         glm::dvec3 ends[3];
         double lengths[3];
         bool ok = true;
-        for (int i = 0; i < 3; ++i) ok = edge_end_on_plane(b, i, plane_p, plane_n, !all, ends[i], lengths[i]) && ok;
+        for (int i = 0; i < 3; ++i)
+            ok = edge_end_on_plane(b, i, plane_p, plane_n, all ? PlaneEnd::Own : PlaneEnd::Extend, ends[i], lengths[i]) && ok;
         if (!ok) continue;
         deposited[n] = 1;
         const auto base = static_cast<unsigned>(positions.size());

@@ -67,10 +67,10 @@ public:
         CausticOutput out;
         const Scene& scene = *frame.scene;
         Stopwatch clock;
-        // Past the reach of `iterations` on water (the floor beyond 0.7 of the way to the first focus at the
-        // defaults) the surfaces' beams get the fewest levels up to fold_iterations whose regime reaches it: past
-        // the focus the folds need a finest grid of 256 (to 1.2 x) or 512 (to 6 x) (README, "Regime of validity
-        // and claim"); pool, 2.1 x past its focus, pays 2x its frame for it.
+        // Past 0.7 of the way to the first focus on water the surfaces' beams get the fewest levels up to
+        // fold_iterations that keep the drawn cases within 0.05: past the focus the folds need a finest grid of
+        // 256 (to 1.0 x), 512 (to 3 x) or 1024 (to 6 x) (README, "The aim at the defaults"); pool, 2.1 x past its
+        // focus, pays 2x its frame for it.
         GridSettings surfaces = grid_;
         surfaces.iterations = surface_levels(frame, grid_, fold_iterations_);
         const bool refined = surfaces.iterations != grid_.iterations;
@@ -229,7 +229,7 @@ MethodInfo method_info() {
          "its start value"},
         {"volume_samples", ParamType::Int, "1", 1, 4, {},
          "Gauss-Legendre points per exact ray-beam interval (1: the paper's single midpoint sample; 2 changed "
-         "sphere_fog's camera_volume error by 0.5 %, within the reference's interval, for 8 % more frame time)"},
+         "sphere_fog's camera_volume error by 0.5 %, within the reference's interval, for 12-24 % more volume time)"},
         {"volume_step", ParamType::Int, "2", 1, 16, {},
          "camera_volume: node spacing [pixels]; pixels between nodes are interpolated bilinearly where the block "
          "is smooth (1: every pixel evaluated, the paper)",
@@ -248,13 +248,15 @@ MethodInfo method_info() {
          "evaluate the volume view's ray-beam integrals four rays at a time in AVX2 lanes where the CPU has AVX2 "
          "(the same values to the bit; false: one ray at a time, for timing comparisons)"},
         {"volume_cull", ParamType::Float, "0", 0.0, 1.0, {},
-         "camera_volume: leave out the beams whose mean radiance over their hull (in-scattered power over the pixels "
-         "it spans) is below this fraction of the brightest beam's (0: none; README, \"Culling faint beams\")"},
+         "camera_volume: leave out the beams whose mean radiance over their hull (in-scattered power over the image "
+         "pixels it spans times its squared distance) is below this fraction of the 99th percentile of the beams' "
+         "(0: none; measured not to pay, README \"The levers\")"},
         {"receiver_samples", ParamType::Int, "3", 1, 8, {},
          "point-in-beam samples per side of each receiver bin (their mean is the bin's mean irradiance)"},
         {"camera_surface", ParamType::Enum, "coverage", 0, 0, {"coverage", "point"},
-         "camera view's surface caustics: coverage (a beam that ends on one plane splits its flux among the pixels "
-         "by the exact area its end section covers: each pixel's box average; other beams point-in-beam) or point "
+         "camera view's surface caustics: coverage (a beam that ends on one plane, or leaves the plane receiver's edge, "
+         "splits its flux among the pixels by the exact area its end section on the plane covers: each pixel's box "
+         "average; other beams point-in-beam) or point "
          "(point-in-beam at every pixel centre, then the tent filter: the paper, Sec. 5.3 and 7)"},
         {"filter", ParamType::Int, "1", 0, 8, {},
          "radius [pixels] of the tent low-pass filter on the camera view's point-in-beam surface caustics (Sec. 7; "

@@ -22,7 +22,7 @@ namespace {
 constexpr double kClaimError = 0.10;
 constexpr double kFineDeviation = 0.01, kCoarseDeviation = 0.05;
 constexpr double kMinFinestGrid = 128, kFoldFinestGrid = 256, kDeepFoldFinestGrid = 512;
-// The deep-fold regime was measured from the default initial grid (16) refined 5 levels: a coarser start
+// The deep-fold regime was measured from the paper's initial grid (16) refined 5 levels: a coarser start
 // could let the oracle miss what the first level does not resolve, and without a refinement level
 // fold_split has nothing to send down.
 constexpr int kDeepFoldMinGrid = 16;
@@ -34,6 +34,7 @@ constexpr double kFocusFine = 0.7, kFocusFolds = 1.2, kFocusDeepFolds = 6.0, kFo
 // 1024 up to 6 x). Where fold_iterations allows none of them, the fewest levels the 0.10 claim reaches.
 constexpr double kAimFolds = 1.0, kAimMidFolds = 3.0;
 constexpr double kAimFinestGrid = 1024;
+constexpr int kAimMinGrid = 32;   // from grid 16 a sine shorter than two initial cells missed 0.05 at any level
 }  // namespace
 
 Capability supports(const Scene& scene) {
@@ -68,15 +69,18 @@ double focus_limit_for(const GridSettings& s) {
 }
 
 // How far past (or short of) the first focus the settings' beams kept the drawn cases within 0.05; 0 where
-// that was not measured (a coarse deviation test, fold_split off, a uniform grid).
+// that was not measured (a coarse deviation test, fold_split off, a uniform grid, an initial grid below 32, no
+// refinement level). Never beyond the claim's own reach (focus_limit_for).
 double aim_limit_for(const GridSettings& s) {
-    if (!s.adaptive || !s.fold_split || s.deviation > kFineDeviation || s.grid < kDeepFoldMinGrid) return 0.0;
+    if (!s.adaptive || !s.fold_split || s.deviation > kFineDeviation || s.grid < kAimMinGrid || s.iterations < 1)
+        return 0.0;
     const int finest = s.grid << s.iterations;
-    return finest >= kAimFinestGrid        ? kFocusDeepFolds
-           : finest >= kDeepFoldFinestGrid ? kAimMidFolds
-           : finest >= kFoldFinestGrid     ? kAimFolds
-           : finest >= kMinFinestGrid      ? kFocusFine
-                                           : 0.0;
+    const double aim = finest >= kAimFinestGrid        ? kFocusDeepFolds
+                       : finest >= kDeepFoldFinestGrid ? kAimMidFolds
+                       : finest >= kFoldFinestGrid     ? kAimFolds
+                       : finest >= kMinFinestGrid      ? kFocusFine
+                                                       : 0.0;
+    return std::min(aim, focus_limit_for(s));
 }
 
 // The fewest levels up to fold_iterations (at least `iterations`) whose limit, by `limit_for`, reaches the
@@ -91,13 +95,16 @@ int fewest_levels(double depth, const GridSettings& s, int fold_iterations, Limi
     return -1;
 }
 
-// The surfaces' levels on water past the reach of `iterations`: the fewest up to fold_iterations that keep the
-// aim (0.05), else the fewest that keep the claim (0.10); `iterations` where the receiver is within its own
-// regime's reach of the aim, or where no level up to fold_iterations would reach even the claim (a coarse
-// deviation test, fold_split off, or a receiver beyond 6 x the focus: refining would cost and claim nothing).
+// The surfaces' levels on water past 0.7 of the way to the first focus (the reach of the finest grid of 128
+// at the fine deviation test; before it the levels are the settings' own, whatever they reach): the fewest up
+// to fold_iterations that keep the aim (0.05), else the fewest that keep the claim (0.10); `iterations` where
+// the receiver is within its own regime's reach of the aim, or where no level up to fold_iterations would reach
+// even the claim (a coarse deviation test, fold_split off, or a receiver beyond 6 x the focus: refining would
+// cost and claim nothing).
 int levels_for(const regime::WaterRegime& w, const GridSettings& s, int fold_iterations) {
     if (!s.adaptive || fold_iterations <= s.iterations || !w.valid) return s.iterations;
     const double depth = w.depth_over_first_focus();
+    if (depth <= kFocusFine) return s.iterations;
     if (const int aimed = fewest_levels(depth, s, fold_iterations, aim_limit_for); aimed >= 0) return aimed;
     if (const int claimed = fewest_levels(depth, s, fold_iterations, focus_limit_for); claimed >= 0) return claimed;
     return s.iterations;
@@ -134,7 +141,7 @@ AccuracyClaim claim_for(const FrameGeometry& frame, const GridSettings& base, in
             return "no height-field water interface: solid refractors are not claimed (ball_lens, whose beams fold into "
                    "its ring caustic)";
         const char* further = focus_limit == kFocusCoarse
-                                  ? " (a deviation of at most 0.01 claims up to 0.7 of the way at 3 levels, and up to 6 x "
+                                  ? " (a deviation of at most 0.01 claims up to 0.7 of the way at a finest grid of 128, and up to 6 x "
                                     "where the surfaces get fold_iterations levels)"
                                   : focus_limit == kFocusFine
                                         ? " (1.2 x needs a finest grid of 256 with fold_split, or a uniform grid of 256; "

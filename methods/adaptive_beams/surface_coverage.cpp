@@ -18,12 +18,13 @@ struct PlaneBatch {
 
 }  // namespace
 
-bool edge_end_on_plane(const Beam& b, int i, const glm::dvec3& p, const glm::dvec3& n, bool extend, glm::dvec3& end,
+bool edge_end_on_plane(const Beam& b, int i, const glm::dvec3& p, const glm::dvec3& n, PlaneEnd how, glm::dvec3& end,
                        double& length) {
     const double stretch = glm::length(b.dp[i]);
-    if (!extend) {
+    if (how != PlaneEnd::Extend) {
         end = b.point(i, b.ye[i]);
         length = (b.ye[i] - b.ys[i]) * stretch;
+        if (how == PlaneEnd::Project) end -= glm::dot(end - p, n) * n;
         return true;
     }
     const glm::dvec3 start = b.point(i, b.ys[i]), d = b.dp[i] / stretch;
@@ -48,12 +49,13 @@ std::vector<std::uint8_t> deposit_plane_beams(const BeamSet& set, const Scene& s
     for (std::size_t n = 0; n < nb; ++n) {
         int object = set.end_object[n];
         const std::uint8_t e = set.ends[n];
-        // Edges that end on the plane receiver or on nothing may be carried on to its plane: where some leave
-        // the receiver's edge, and where the energy cut ended them short of it (their light there is faint,
-        // and drawing it costs less than testing every pixel of their wide sections point by point).
-        const bool extendable = plane_receiver && (e & kEndsOnReceiver) && (e & kReceiverOrNothing);
-        bool extend = object < 0 && extendable;
-        if (extend) object = receiver;
+        // Edges that end on the plane receiver or on nothing: carried on to its plane where some leave the
+        // receiver's edge; where all end on it but the energy cut ended them short, moved onto it (their light
+        // there is faint, and drawing it costs less than testing every pixel of their wide sections point by
+        // point). Both as the receiver map places them (accumulate_receiver).
+        const bool on_receiver = plane_receiver && (e & kEndsOnReceiver) && (e & kReceiverOrNothing);
+        PlaneEnd how = object < 0 && on_receiver ? PlaneEnd::Extend : PlaneEnd::Own;
+        if (how == PlaneEnd::Extend) object = receiver;
         if (object < 0 || !(e & kEndsOnDiffuse)) continue;
         const Object& plane = scene.objects[static_cast<std::size_t>(object)];
         if (plane.shape != ShapeType::Plane) continue;
@@ -65,14 +67,14 @@ std::vector<std::uint8_t> deposit_plane_beams(const BeamSet& set, const Scene& s
         bool ok = false;
         for (int attempt = 0; attempt < 2 && !ok; ++attempt) {
             if (attempt == 1) {
-                if (extend || !extendable || object != receiver) break;
-                extend = true;
+                if (how != PlaneEnd::Own || !on_receiver || !(e & kAllOnReceiver) || object != receiver) break;
+                how = PlaneEnd::Project;
             }
             ok = true;
             arriving = 0.0;
             for (int i = 0; i < 3 && ok; ++i) {
                 double length = 0.0;
-                ok = edge_end_on_plane(b, i, plane.center, np, extend, ends[i], length);
+                ok = edge_end_on_plane(b, i, plane.center, np, how, ends[i], length);
                 // An edge cut short by the energy cutoff does not end on the plane, whatever its path's end. The
                 // tolerance is relative to the coordinates and the edge's length: the hits are single precision.
                 const double scale = 1.0 + glm::length(ends[i] - plane.center) + length;

@@ -11,8 +11,9 @@
 // cannot hide part of itself, so the pixel sees the triangle's point). A beam that leaves the edge of a plane
 // receiver (each edge ends on it or on nothing) is taken too, its edges extended to the receiver's plane as
 // the receiver map extends them: the part of its section beyond the receiver's edge falls on pixels that do
-// not see the receiver. Beams whose edges end on different surfaces, on curved ones, or behind the camera are
-// left to the point-in-beam pass.
+// not see the receiver. So is a beam whose edges all end on the plane receiver but which the energy cut ended
+// short of it, its ends moved onto the plane as the receiver map's chart places them. Beams whose edges end
+// on different surfaces, on curved ones, or behind the camera are left to the point-in-beam pass.
 #include <cstdint>
 #include <vector>
 
@@ -23,10 +24,15 @@
 
 namespace caustics::adaptive_beams {
 
-// Where edge i of `b` meets the plane through p with normal n, and the length of its path there: its own end
-// where `extend` is false (the edge ends on the plane), else its line carried on to the plane. False where an
-// extended edge meets the plane only behind its start (or never).
-bool edge_end_on_plane(const Beam& b, int i, const glm::dvec3& p, const glm::dvec3& n, bool extend, glm::dvec3& end,
+// How an edge's end is put on a plane: its own end (the edge ends there), its line carried on to the plane
+// (it left the plane's edge), or its own end moved along the plane's normal onto it (the energy cut ended it
+// short of the plane: where the receiver map's chart places such an end).
+enum class PlaneEnd { Own, Extend, Project };
+
+// Where edge i of `b` meets the plane through p with unit normal n, and the length of its path there (the
+// light's path, whose transmittance the flux keeps). False where an extended edge meets the plane only behind
+// its start (or never).
+bool edge_end_on_plane(const Beam& b, int i, const glm::dvec3& p, const glm::dvec3& n, PlaneEnd how, glm::dvec3& end,
                        double& length);
 
 // Adds the box-filtered irradiance of the beams it takes to `surface` (covered pixels of their plane), adds

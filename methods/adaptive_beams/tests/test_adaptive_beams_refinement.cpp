@@ -136,9 +136,15 @@ TEST(AdaptiveBeams, VolumeViewKeepsItsLevelsWhenTheSurfacesAreRefined) {
 }
 
 // Before the reach of `iterations` (sine: 0.62 of the way to its first focus) nothing is refined, and the
-// frame is the one fold_iterations 0 draws.
+// frame is the one fold_iterations 0 draws; before 0.7 of the way the levels are the settings' own even where
+// they reach less (grid 16 with 2 levels: a finest grid of 64, outside the claim).
 TEST(AdaptiveBeams, NotRefinedWithinTheReachOfItsLevels) {
-    expect_defaults_draw_as(test_support::shipped_scene("sine"), 0, {{"fold_iterations", "0"}});
+    const Scene sine = test_support::shipped_scene("sine");
+    expect_defaults_draw_as(sine, 0, {{"fold_iterations", "0"}});
+    const Rendered coarse = render(sine, {{"grid", "16"}, {"iterations", "2"}}, 64, 2, false);
+    EXPECT_EQ(coarse.out.health.get("refined_past_focus"), 0);
+    EXPECT_EQ(coarse.out.receiver.pixels,
+              render(sine, {{"grid", "16"}, {"iterations", "2"}, {"fold_iterations", "0"}}, 64, 2, false).out.receiver.pixels);
 }
 
 
