@@ -288,8 +288,10 @@ void accumulate_receiver(const BeamSet& set, const Scene& scene, const ReceiverC
         glm::dvec3 ends[3];
         double lengths[3];
         bool ok = true;
-        for (int i = 0; i < 3; ++i)
-            ok = edge_end_on_plane(b, i, plane_p, plane_n, all ? PlaneEnd::Own : PlaneEnd::Extend, ends[i], lengths[i]) && ok;
+        // Beams that leave the receiver's edge, and beams the energy cut ended short of it, are carried on to its
+        // plane (the camera's coverage pass places them alike, surface_coverage.hpp).
+        const PlaneEnd how = all && (!chart.is_plane() || ends_on_plane(b, plane_p, plane_n)) ? PlaneEnd::Own : PlaneEnd::Extend;
+        for (int i = 0; i < 3; ++i) ok = edge_end_on_plane(b, i, plane_p, plane_n, how, ends[i], lengths[i]) && ok;
         if (!ok) continue;
         deposited[n] = 1;
         const auto base = static_cast<unsigned>(positions.size());

@@ -21,10 +21,9 @@ struct PlaneBatch {
 bool edge_end_on_plane(const Beam& b, int i, const glm::dvec3& p, const glm::dvec3& n, PlaneEnd how, glm::dvec3& end,
                        double& length) {
     const double stretch = glm::length(b.dp[i]);
-    if (how != PlaneEnd::Extend) {
+    if (how == PlaneEnd::Own) {
         end = b.point(i, b.ye[i]);
         length = (b.ye[i] - b.ys[i]) * stretch;
-        if (how == PlaneEnd::Project) end -= glm::dot(end - p, n) * n;
         return true;
     }
     const glm::dvec3 start = b.point(i, b.ys[i]), d = b.dp[i] / stretch;
@@ -33,6 +32,15 @@ bool edge_end_on_plane(const Beam& b, int i, const glm::dvec3& p, const glm::dve
     end = start + t * d;
     length = t;
     return t > 0.0;
+}
+
+bool ends_on_plane(const Beam& b, const glm::dvec3& p, const glm::dvec3& n) {
+    for (int i = 0; i < 3; ++i) {
+        const glm::dvec3 end = b.point(i, b.ye[i]);
+        const double scale = 1.0 + glm::length(end - p) + (b.ye[i] - b.ys[i]) * glm::length(b.dp[i]);
+        if (!(std::abs(glm::dot(end - p, n)) <= 1e-5 * scale)) return false;
+    }
+    return true;
 }
 
 std::vector<std::uint8_t> deposit_plane_beams(const BeamSet& set, const Scene& scene, const CameraGBuffer& g,
@@ -49,39 +57,33 @@ std::vector<std::uint8_t> deposit_plane_beams(const BeamSet& set, const Scene& s
     for (std::size_t n = 0; n < nb; ++n) {
         int object = set.end_object[n];
         const std::uint8_t e = set.ends[n];
-        // Edges that end on the plane receiver or on nothing: carried on to its plane where some leave the
-        // receiver's edge; where all end on it but the energy cut ended them short, moved onto it (their light
-        // there is faint, and drawing it costs less than testing every pixel of their wide sections point by
-        // point). Both as the receiver map places them (accumulate_receiver).
+        // Edges that end on the plane receiver or on nothing are carried on to its plane where some leave the
+        // receiver's edge, or where all end on it but the energy cut ended them short (their light there is
+        // faint, and drawing it costs less than testing every pixel of their wide sections point by point): as
+        // the receiver map carries them (accumulate_receiver).
         const bool on_receiver = plane_receiver && (e & kEndsOnReceiver) && (e & kReceiverOrNothing);
-        PlaneEnd how = object < 0 && on_receiver ? PlaneEnd::Extend : PlaneEnd::Own;
-        if (how == PlaneEnd::Extend) object = receiver;
+        if (object < 0 && on_receiver) object = receiver;
         if (object < 0 || !(e & kEndsOnDiffuse)) continue;
         const Object& plane = scene.objects[static_cast<std::size_t>(object)];
         if (plane.shape != ShapeType::Plane) continue;
         const Beam& b = set.beams[n];
         const glm::dvec3 np = glm::normalize(glm::cross(plane.u, plane.v));
+        const PlaneEnd how = on_receiver && object == receiver && !((e & kAllOnReceiver) && ends_on_plane(b, plane.center, np))
+                                 ? PlaneEnd::Extend
+                                 : PlaneEnd::Own;
         const double sigma_t = medium_at(scene, b.medium).extinction();
         glm::dvec3 ends[3];
         double px[3], py[3], arriving = 0.0;
-        bool ok = false;
-        for (int attempt = 0; attempt < 2 && !ok; ++attempt) {
-            if (attempt == 1) {
-                if (how != PlaneEnd::Own || !on_receiver || !(e & kAllOnReceiver) || object != receiver) break;
-                how = PlaneEnd::Project;
-            }
-            ok = true;
-            arriving = 0.0;
-            for (int i = 0; i < 3 && ok; ++i) {
-                double length = 0.0;
-                ok = edge_end_on_plane(b, i, plane.center, np, how, ends[i], length);
-                // An edge cut short by the energy cutoff does not end on the plane, whatever its path's end. The
-                // tolerance is relative to the coordinates and the edge's length: the hits are single precision.
-                const double scale = 1.0 + glm::length(ends[i] - plane.center) + length;
-                ok = ok && std::abs(glm::dot(ends[i] - plane.center, np)) <= 1e-5 * scale &&
-                     cam.project(ends[i], px[i], py[i]) && std::abs(px[i]) < far_out && std::abs(py[i]) < far_out;
-                arriving += b.w[i] * std::exp(-sigma_t * length) / 3.0;
-            }
+        bool ok = true;
+        for (int i = 0; i < 3 && ok; ++i) {
+            double length = 0.0;
+            ok = edge_end_on_plane(b, i, plane.center, np, how, ends[i], length);
+            // An edge cut short by the energy cutoff does not end on the plane, whatever its path's end. The
+            // tolerance is relative to the coordinates and the edge's length: the hits are single precision.
+            const double scale = 1.0 + glm::length(ends[i] - plane.center) + length;
+            ok = ok && std::abs(glm::dot(ends[i] - plane.center, np)) <= 1e-5 * scale &&
+                 cam.project(ends[i], px[i], py[i]) && std::abs(px[i]) < far_out && std::abs(py[i]) < far_out;
+            arriving += b.w[i] * std::exp(-sigma_t * length) / 3.0;
         }
         if (!ok) continue;
         taken[n] = 1;

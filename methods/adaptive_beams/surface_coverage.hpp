@@ -12,8 +12,8 @@
 // receiver (each edge ends on it or on nothing) is taken too, its edges extended to the receiver's plane as
 // the receiver map extends them: the part of its section beyond the receiver's edge falls on pixels that do
 // not see the receiver. So is a beam whose edges all end on the plane receiver but which the energy cut ended
-// short of it, its ends moved onto the plane as the receiver map's chart places them. Beams whose edges end
-// on different surfaces, on curved ones, or behind the camera are left to the point-in-beam pass.
+// short of it, its edges carried on to the plane as the receiver map carries them. Beams whose edges end on
+// different surfaces, on curved ones, or behind the camera are left to the point-in-beam pass.
 #include <cstdint>
 #include <vector>
 
@@ -24,10 +24,14 @@
 
 namespace caustics::adaptive_beams {
 
-// How an edge's end is put on a plane: its own end (the edge ends there), its line carried on to the plane
-// (it left the plane's edge), or its own end moved along the plane's normal onto it (the energy cut ended it
-// short of the plane: where the receiver map's chart places such an end).
-enum class PlaneEnd { Own, Extend, Project };
+// How an edge's end is put on a plane: its own end (the edge ends there), or its line carried on to the plane
+// (it left the plane's edge, or the energy cut ended it short of the plane).
+enum class PlaneEnd { Own, Extend };
+
+// Whether all three edges of `b` end on the plane through p with unit normal n (within the single-precision
+// hits' tolerance, relative to the coordinates and the edge's length): false where the energy cut ended one
+// short of it, whatever its path's end.
+bool ends_on_plane(const Beam& b, const glm::dvec3& p, const glm::dvec3& n);
 
 // Where edge i of `b` meets the plane through p with unit normal n, and the length of its path there (the
 // light's path, whose transmittance the flux keeps). False where an extended edge meets the plane only behind
