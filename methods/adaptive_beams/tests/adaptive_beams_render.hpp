@@ -15,9 +15,19 @@
 #include <caustics/frame/receiver_chart.hpp>
 #include <caustics/util/image.hpp>
 
+#include "sine_truth_support.hpp"
+
 namespace caustics::adaptive_beams_test {
 
 constexpr const char* kMethod = "adaptive_beams";
+
+// A sine 2.25 x its first focus down under 20 deg light, on a 2 mm height-field cell: the past-the-focus case
+// two tests measure against its exact closed form.
+inline Scene past_focus_sine_scene() {
+    test_support::SineSetup c = test_support::sine_case(20.0, -1.2, 0.2, false);
+    c.cell = 0.002;
+    return test_support::make_sine_scene(c);
+}
 
 struct Rendered {
     CausticOutput out;

@@ -165,9 +165,7 @@ TEST(AdaptiveBeams, FlatObliqueMatchesTheFlatInterface) {
 // `sphere`, where the oracle splits nearly every cell that sees the ball, the two draw about the same: README,
 // "Adaptive against uniform".)
 TEST(AdaptiveBeams, AdaptiveBeatsUniformAtEqualBeamCountPastTheFocus) {
-    test_support::SineSetup c = test_support::sine_case(20.0, -1.2, 0.2, false);
-    c.cell = 0.002;
-    const Scene scene = test_support::make_sine_scene(c);
+    const Scene scene = past_focus_sine_scene();
     const FrameGeometry frame = build_frame_geometry(scene, 0);
     constexpr int kBins = 256;
     const ReceiverChart chart(frame, kBins, kBins);

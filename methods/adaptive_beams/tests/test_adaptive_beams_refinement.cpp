@@ -49,9 +49,7 @@ void expect_defaults_draw_as(const Scene& scene, int refined, const std::map<std
 // grid of 512 (the defaults' grid 32 with 4 levels); at 256 (claimed to 1.2 x) outside, the reason naming what
 // reaches 6 x.
 TEST(AdaptiveBeams, PastTheFocusClaimedAtAFinestGridOf512) {
-    test_support::SineSetup c = test_support::sine_case(20.0, -1.2, 0.2, false);
-    c.cell = 0.002;
-    const Scene scene = test_support::make_sine_scene(c);
+    const Scene scene = past_focus_sine_scene();
     const FrameGeometry frame = build_frame_geometry(scene, 0);
     constexpr int kBins = 256;
     const ReceiverChart chart(frame, kBins, kBins);
