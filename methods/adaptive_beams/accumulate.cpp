@@ -89,14 +89,13 @@ double covered_pixels(const Coverage& cov, int W, int H) {
 // function and the extinction towards the camera left out) is an intensity towards the camera that spreads
 // over the beam's projected area, pixels x d^2 x the pixel's solid angle at its distance d: the mean radiance
 // it adds where it adds any is that power over pixels x d^2, up to a factor common to all beams. Beams below
-// `fraction` of the largest are dropped from `beams`: the cost of the volume view is the pixels each beam
+// `fraction` of the measures' 99th percentile are dropped from `beams`: the cost of the volume view is the pixels each beam
 // spans. Beams in no pixel of the image (nothing to cost or add) and beams whose measure is not finite are
 // kept and set no scale. Returns how many were dropped.
 std::int64_t cull_faint_beams(std::vector<VolumeBeam>& beams, const std::vector<const Beam*>& source, double sigma_t,
                               const glm::dvec3& eye, int W, int H, double fraction) {
     if (!(fraction > 0.0) || beams.empty()) return 0;
     std::vector<double> mean_radiance(beams.size());
-    double brightest = 0.0;
     for (std::size_t k = 0; k < beams.size(); ++k) {
         const Beam& b = *source[k];
         double length = 0.0, w = 0.0;
@@ -117,14 +116,13 @@ std::int64_t cull_faint_beams(std::vector<VolumeBeam>& beams, const std::vector<
     std::vector<double> sorted;
     for (double r : mean_radiance)
         if (r >= 0.0) sorted.push_back(r);
-    if (!sorted.empty()) {
-        const auto at = sorted.begin() + static_cast<std::ptrdiff_t>(0.99 * static_cast<double>(sorted.size() - 1));
-        std::nth_element(sorted.begin(), at, sorted.end());
-        brightest = *at;
-    }
+    if (sorted.empty()) return 0;
+    const auto at = sorted.begin() + static_cast<std::ptrdiff_t>(0.99 * static_cast<double>(sorted.size() - 1));
+    std::nth_element(sorted.begin(), at, sorted.end());
+    const double scale = *at;
     std::size_t kept = 0;
     for (std::size_t k = 0; k < beams.size(); ++k)
-        if (mean_radiance[k] < 0.0 || mean_radiance[k] >= fraction * brightest) beams[kept++] = beams[k];
+        if (mean_radiance[k] < 0.0 || mean_radiance[k] >= fraction * scale) beams[kept++] = beams[k];
     const auto culled = static_cast<std::int64_t>(beams.size() - kept);
     beams.resize(kept);
     return culled;

@@ -68,21 +68,20 @@ std::vector<std::uint8_t> deposit_plane_beams(const BeamSet& set, const Scene& s
         if (plane.shape != ShapeType::Plane) continue;
         const Beam& b = set.beams[n];
         const glm::dvec3 np = glm::normalize(glm::cross(plane.u, plane.v));
-        const PlaneEnd how = on_receiver && object == receiver && !((e & kAllOnReceiver) && ends_on_plane(b, plane.center, np))
-                                 ? PlaneEnd::Extend
-                                 : PlaneEnd::Own;
+        // A beam's own ends must lie on the plane (an edge the energy cut ended short of another plane does not
+        // end on it, whatever its path's end); carried-on ends lie on it by construction.
+        const bool own_on_plane = ends_on_plane(b, plane.center, np);
+        const PlaneEnd how =
+            on_receiver && object == receiver && !((e & kAllOnReceiver) && own_on_plane) ? PlaneEnd::Extend : PlaneEnd::Own;
+        if (how == PlaneEnd::Own && !own_on_plane) continue;
         const double sigma_t = medium_at(scene, b.medium).extinction();
         glm::dvec3 ends[3];
         double px[3], py[3], arriving = 0.0;
         bool ok = true;
         for (int i = 0; i < 3 && ok; ++i) {
             double length = 0.0;
-            ok = edge_end_on_plane(b, i, plane.center, np, how, ends[i], length);
-            // An edge cut short by the energy cutoff does not end on the plane, whatever its path's end. The
-            // tolerance is relative to the coordinates and the edge's length: the hits are single precision.
-            const double scale = 1.0 + glm::length(ends[i] - plane.center) + length;
-            ok = ok && std::abs(glm::dot(ends[i] - plane.center, np)) <= 1e-5 * scale &&
-                 cam.project(ends[i], px[i], py[i]) && std::abs(px[i]) < far_out && std::abs(py[i]) < far_out;
+            ok = edge_end_on_plane(b, i, plane.center, np, how, ends[i], length) && cam.project(ends[i], px[i], py[i]) &&
+                 std::abs(px[i]) < far_out && std::abs(py[i]) < far_out;
             arriving += b.w[i] * std::exp(-sigma_t * length) / 3.0;
         }
         if (!ok) continue;

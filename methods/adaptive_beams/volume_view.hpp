@@ -39,8 +39,8 @@ struct VolumeSettings {
     int subpixels = 2;     // rays per side of a refined pixel
     int edge_subpixels = 1;   // rays per side of a refined pixel whose sub-rays disagree (a hull's edge in it)
     bool lanes = true;     // the ray-beam integrals four rays at a time in AVX2 lanes where the CPU has them
-    double cull = 0.0;     // beams whose mean radiance over their hull is below this fraction of the brightest
-                           // beam's are left out (accumulate.cpp, cull_faint_beams); 0: none
+    double cull = 0.0;     // beams whose mean radiance over their hull is below this fraction of the beams' 99th
+                           // percentile are left out (accumulate.cpp, cull_faint_beams); 0: none
 };
 
 struct VolumeStats {
