@@ -272,6 +272,7 @@ int build_elliptic_splats(const std::vector<FaceSplat>& landing, int grid, float
     const int g = grid;
     const std::size_t faces = per_face.size();
     const float sigma0 = min_radius / kEllipticCutoff;
+    const float s2 = elliptic_sigma(grid) * elliptic_sigma(grid), o2 = sigma0 * sigma0;
     // Each face's splats in the order of the landed texels (row-major): each row's first slot per face
     // from a count first, so that the rows can then be built in parallel into their slots.
     std::vector<std::size_t> row_slot(static_cast<std::size_t>(g) * faces);
@@ -296,7 +297,6 @@ int build_elliptic_splats(const std::vector<FaceSplat>& landing, int grid, float
                 glm::vec2 jx, jy;
                 glm::vec3 cov;
                 if (lattice_step(landing, g, x, y, 1, 0, jx) && lattice_step(landing, g, x, y, 0, 1, jy)) {
-                    const float s2 = kEllipticSigma * kEllipticSigma, o2 = sigma0 * sigma0;
                     cov = {s2 * (jx.x * jx.x + jy.x * jy.x) + o2, s2 * (jx.x * jx.y + jy.x * jy.y),
                            s2 * (jx.y * jx.y + jy.y * jy.y) + o2};
                 } else {
