@@ -45,6 +45,7 @@ public:
         acc_.volume.subpixels = static_cast<int>(p.get_int("volume_subpixels"));
         acc_.volume.edge_subpixels = static_cast<int>(p.get_int("volume_edge_subpixels"));
         acc_.volume.lanes = p.get_bool("volume_lanes");
+        acc_.volume.single = p.get_enum("volume_precision") == "float";
         acc_.volume.cull = p.get_float("volume_cull");
         acc_.receiver_samples = static_cast<int>(p.get_int("receiver_samples"));
         acc_.filter = static_cast<int>(p.get_int("filter"));
@@ -247,6 +248,10 @@ MethodInfo method_info() {
         {"volume_lanes", ParamType::Bool, "true", 0, 0, {},
          "evaluate the volume view's ray-beam integrals four rays at a time in AVX2 lanes where the CPU has AVX2 "
          "(the same values to the bit; false: one ray at a time, for timing comparisons)"},
+        {"volume_precision", ParamType::Enum, "double", 0, 0, {"double", "float"},
+         "camera_volume: the arithmetic of each fragment's ray-beam integral (float: the beam's constants and the "
+         "ray rounded to single precision and everything after in it, one ray at a time: what float lanes would "
+         "cost in error, measured before they are built; slower here than the double lanes)"},
         {"volume_cull", ParamType::Float, "0", 0.0, 1.0, {},
          "camera_volume: leave out the beams whose mean radiance over their hull (in-scattered power over the image "
          "pixels it spans times its squared distance) is below this fraction of the 99th percentile of the beams' "

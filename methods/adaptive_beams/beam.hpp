@@ -95,18 +95,19 @@ double volume_radiance_pointwise(const Beam& b, const MediumCoefficients& medium
 
 // Real roots of a + b s + c s^2 appended to `out` (a linear or constant polynomial where c vanishes
 // against the other coefficients).
-inline void real_roots(double a, double b, double c, double* out, int& n) {
-    const double scale = std::max({std::abs(a), std::abs(b), std::abs(c)});
-    if (scale == 0.0) return;
-    if (std::abs(c) <= 1e-12 * scale) {
-        if (std::abs(b) > 1e-14 * scale) out[n++] = -a / b;
+template <typename T>
+inline void real_roots(T a, T b, T c, T* out, int& n) {
+    const T scale = std::max({std::abs(a), std::abs(b), std::abs(c)});
+    if (scale == T(0)) return;
+    if (std::abs(c) <= T(1e-12) * scale) {
+        if (std::abs(b) > T(1e-14) * scale) out[n++] = -a / b;
         return;
     }
-    const double disc = b * b - 4.0 * a * c;
-    if (disc < 0.0) return;
-    const double q = -0.5 * (b + std::copysign(std::sqrt(disc), b));
+    const T disc = b * b - T(4) * a * c;
+    if (disc < T(0)) return;
+    const T q = T(-0.5) * (b + std::copysign(std::sqrt(disc), b));
     out[n++] = q / c;
-    if (q != 0.0) out[n++] = a / q;
+    if (q != T(0)) out[n++] = a / q;
 }
 
 // Whether A(y) changes sign inside the beam's slab (y0, y1): the beam passes a focus there.

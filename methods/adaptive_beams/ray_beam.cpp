@@ -34,85 +34,111 @@ RayBeam::RayBeam(const Beam& b, const glm::dvec3& o, const MediumCoefficients& m
     to_centre_ = centre_ - o;
 }
 
-double RayBeam::radiance(const glm::dvec3& w, double s_max, int samples, BeamCounters& counters, double s_min) const {
-    const double yw = glm::dot(w, n_);
-    const glm::dvec2 qw{glm::dot(w, e1_), glm::dot(w, e2_)};
+// In T = double every operation is the one the lanes (ray_beam_lanes.cpp) reproduce to the bit; in T = float
+// the beam's constants and the direction are rounded to float once and everything after is float, as
+// single-precision lanes would compute it (the sum over the nodes too).
+template <typename T>
+double RayBeam::radiance_in(const glm::dvec3& w_in, double s_max, int samples, BeamCounters& counters, double s_min) const {
+    using V2 = glm::vec<2, T>;
+    using V3 = glm::vec<3, T>;
+    const V3 w(w_in);
+    const T yw = glm::dot(w, V3(n_));
+    const V2 qw{glm::dot(w, V3(e1_)), glm::dot(w, V3(e2_))};
+    const T yo = T(yo_), y0 = T(y0_), y1 = T(y1_);
     // Bound s by the slab y in [y0, y1] (or, for a ray parallel to it, by the hull's bounding sphere).
-    double s_lo = s_min, s_hi = s_max;
-    if (std::abs(yw) > 1e-12) {
-        double sa = (y0_ - yo_) / yw, sb = (y1_ - yo_) / yw;
+    T s_lo = T(s_min), s_hi = T(s_max);
+    if (std::abs(yw) > T(1e-12)) {
+        T sa = (y0 - yo) / yw, sb = (y1 - yo) / yw;
         if (sa > sb) std::swap(sa, sb);
         s_lo = std::max(s_lo, sa);
         s_hi = std::min(s_hi, sb);
     } else {
-        if (yo_ < y0_ || yo_ > y1_) return 0.0;
-        const double sc = glm::dot(to_centre_, w);
-        s_lo = std::max(s_lo, sc - radius_);
-        s_hi = std::min(s_hi, sc + radius_);
+        if (yo < y0 || yo > y1) return 0.0;
+        const T sc = glm::dot(V3(to_centre_), w);
+        s_lo = std::max(s_lo, sc - T(radius_));
+        s_hi = std::min(s_hi, sc + T(radius_));
     }
     if (!(s_hi > s_lo)) return 0.0;
     // The edge functions' coefficients for this direction, and 2 A(y(s)) as their sum.
-    double f1[3], f2[3];
+    T f0[3], f1[3], f2[3];
     for (int k = 0; k < 3; ++k) {
-        f1[k] = yw * k1_[k] + cross2(c1_[k], qw);
-        f2[k] = yw * (yw * G_[k] - cross2(h_[k], qw));
+        const V2 c1(c1_[k]), h(h_[k]);
+        f0[k] = T(f0_[k]);
+        f1[k] = yw * T(k1_[k]) + (c1.x * qw.y - c1.y * qw.x);
+        f2[k] = yw * (yw * T(G_[k]) - (h.x * qw.y - h.y * qw.x));
     }
-    double cand[10];
+    T cand[10];
     int nc = 0;
     cand[nc++] = s_lo;
-    for (int k = 0; k < 3; ++k) real_roots(f0_[k], f1[k], f2[k], cand, nc);
+    for (int k = 0; k < 3; ++k) real_roots(f0[k], f1[k], f2[k], cand, nc);
     // A(y(s)) has a root inside the slab only where the beam passes a focus.
-    if (flipped_) real_roots(f0_[0] + f0_[1] + f0_[2], f1[0] + f1[1] + f1[2], f2[0] + f2[1] + f2[2], cand, nc);
+    if (flipped_) real_roots(f0[0] + f0[1] + f0[2], f1[0] + f1[1] + f1[2], f2[0] + f2[1] + f2[2], cand, nc);
     int kept = 1;
     for (int k = 1; k < nc; ++k) insert_interval_end(cand[k], s_lo, s_hi, cand, kept);
     nc = kept;
     cand[nc++] = s_hi;
     const GaussRule& gq = gauss_rule(samples);
-    auto edges = [&](double s, double F[3]) {
-        for (int k = 0; k < 3; ++k) F[k] = f0_[k] + s * (f1[k] + s * f2[k]);
+    auto edges = [&](T s, T F[3]) {
+        for (int k = 0; k < 3; ++k) F[k] = f0[k] + s * (f1[k] + s * f2[k]);
         return F[0] + F[1] + F[2];
     };
-    double total = 0.0;
+    const V3 dp[3] = {V3(dp_[0]), V3(dp_[1]), V3(dp_[2])};
+    const T ys_c[3] = {T(ys_[0]), T(ys_[1]), T(ys_[2])}, ye_c[3] = {T(ye_[0]), T(ye_[1]), T(ye_[2])};
+    const T w_c[3] = {T(w_[0]), T(w_[1]), T(w_[2])};
+    const T a_min = T(a_min_), k_c = T(k_), hg_a = T(hg_a_), hg_b = T(hg_b_), sigma_t = T(sigma_t_);
+    T total = T(0);
     for (int k = 0; k + 1 < nc; ++k) {
-        const double sa = cand[k], sb = cand[k + 1];
+        const T sa = cand[k], sb = cand[k + 1];
         if (!(sb > sa)) continue;
-        const double half = 0.5 * (sb - sa), mid = 0.5 * (sa + sb);
+        const T half = T(0.5) * (sb - sa), mid = T(0.5) * (sa + sb);
         // The midpoint decides the whole sub-interval: its ends are the roots where the ray crosses a side.
         {
-            double F[3];
-            const double a2 = edges(mid, F);
+            T F[3];
+            const T a2 = edges(mid, F);
             if (!inside_section(F, a2)) continue;
         }
         for (int i = 0; i < gq.n; ++i) {
-            const double s = mid + half * gq.x[i];
-            const double y = yo_ + s * yw;
-            double F[3];
-            const double a2 = edges(s, F);
-            if (a2 == 0.0) continue;
-            const double inv = 1.0 / a2;
-            const double b0 = F[0] * inv, b1 = F[1] * inv, b2 = 1.0 - b0 - b1;
+            const T s = mid + half * T(gq.x[i]);
+            const T y = yo + s * yw;
+            T F[3];
+            const T a2 = edges(s, F);
+            if (a2 == T(0)) continue;
+            const T inv = T(1) / a2;
+            const T b0 = F[0] * inv, b1 = F[1] * inv, b2 = T(1) - b0 - b1;
             // The local ray through the node (beam.cpp, local_density): its start, direction, weight.
-            const double ys = b0 * ys_[0] + b1 * ys_[1] + b2 * ys_[2];
-            const double ye = b0 * ye_[0] + b1 * ye_[1] + b2 * ye_[2];
-            if (y < ys - 1e-9 * (1.0 + std::abs(ys)) || y > ye) continue;
-            const glm::dvec3 dl = b0 * dp_[0] + b1 * dp_[1] + b2 * dp_[2];
-            const double stretch = std::sqrt(glm::dot(dl, dl));
-            if (!(stretch > 0.0)) continue;   // a degenerate section carries nothing (as the pointwise form)
-            const double weight = b0 * w_[0] + b1 * w_[1] + b2 * w_[2];
-            double a = std::abs(0.5 * a2);
-            if (a < a_min_) {
-                a = a_min_;
+            const T ys = b0 * ys_c[0] + b1 * ys_c[1] + b2 * ys_c[2];
+            const T ye = b0 * ye_c[0] + b1 * ye_c[1] + b2 * ye_c[2];
+            if (y < ys - T(1e-9) * (T(1) + std::abs(ys)) || y > ye) continue;
+            const V3 dl = b0 * dp[0] + b1 * dp[1] + b2 * dp[2];
+            const T stretch = std::sqrt(glm::dot(dl, dl));
+            if (!(stretch > T(0))) continue;   // a degenerate section carries nothing (as the pointwise form)
+            const T weight = b0 * w_c[0] + b1 * w_c[1] + b2 * w_c[2];
+            T a = std::abs(T(0.5) * a2);
+            if (a < a_min) {
+                a = a_min;
                 ++counters.clamped;
             }
-            const double path = std::max(0.0, y - ys) * stretch;
+            const T path = std::max(T(0), y - ys) * stretch;
             // sigma_s p_HG(cos) E_perp with E_perp = flux weight stretch / |A| (beam.cpp, local_density) and
             // p_HG = (1 - g^2) / (4 pi d^1.5), d = 1 + g^2 - 2 g cos: one division for the three.
-            const double d = hg_a_ - hg_b_ * (-glm::dot(dl, w) / stretch);
+            const T d = hg_a - hg_b * (-glm::dot(dl, w) / stretch);
             // Extinction along the light's path in the beam and then towards the camera, one exponential.
-            total += gq.w[i] * half * k_ * weight * stretch * std::exp(-sigma_t_ * (path + s)) / (a * d * std::sqrt(d));
+            total += T(gq.w[i]) * half * k_c * weight * stretch * std::exp(-sigma_t * (path + s)) / (a * d * std::sqrt(d));
         }
     }
-    return total;
+    return static_cast<double>(total);
+}
+
+template double RayBeam::radiance_in<double>(const glm::dvec3&, double, int, BeamCounters&, double) const;
+template double RayBeam::radiance_in<float>(const glm::dvec3&, double, int, BeamCounters&, double) const;
+
+double RayBeam::radiance(const glm::dvec3& w, double s_max, int samples, BeamCounters& counters, double s_min) const {
+    return radiance_in<double>(w, s_max, samples, counters, s_min);
+}
+
+void RayBeam::radiance_each_single(const glm::dvec3* w, const double* s_max, int n, int samples,
+                                   BeamCounters& counters, double s_min, double* out) const {
+    for (int j = 0; j < n; ++j) out[j] = radiance_in<float>(w[j], s_max[j], samples, counters, s_min);
 }
 
 }  // namespace caustics::adaptive_beams

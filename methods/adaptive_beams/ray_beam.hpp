@@ -24,7 +24,8 @@ namespace caustics::adaptive_beams {
 // The ends of a ray's sub-intervals in the slab, cand[0] = s_lo, then the crossing roots kept sorted in
 // cand[1 .. kept): a root v joins them where it lies strictly inside (s_lo, s_hi) (NaN, no root, never does).
 // RayBeam::radiance and its lanes share it; cand may hold v itself at an index >= kept.
-inline void insert_interval_end(double v, double s_lo, double s_hi, double* cand, int& kept) {
+template <typename T>
+inline void insert_interval_end(T v, T s_lo, T s_hi, T* cand, int& kept) {
     if (!(v > s_lo && v < s_hi)) return;
     int m = kept++;
     while (m > 1 && cand[m - 1] > v) cand[m] = cand[m - 1], --m;
@@ -33,8 +34,9 @@ inline void insert_interval_end(double v, double s_lo, double s_hi, double* cand
 
 // Whether the point whose edge functions are F (their sum a2 = 2 A) lies in the cross-section: every F_k has
 // the sign of A (or is zero).
-inline bool inside_section(const double F[3], double a2) {
-    return a2 > 0.0 ? (F[0] >= 0.0 && F[1] >= 0.0 && F[2] >= 0.0) : a2 < 0.0 && (F[0] <= 0.0 && F[1] <= 0.0 && F[2] <= 0.0);
+template <typename T>
+inline bool inside_section(const T F[3], T a2) {
+    return a2 > T(0) ? (F[0] >= T(0) && F[1] >= T(0) && F[2] >= T(0)) : a2 < T(0) && (F[0] <= T(0) && F[1] <= T(0) && F[2] <= T(0));
 }
 
 class RayBeam {
@@ -55,8 +57,17 @@ public:
     // The same, one ray at a time (where the CPU lacks AVX2, and for timing comparisons).
     void radiance_each(const glm::dvec3* w, const double* s_max, int n, int samples, BeamCounters& counters,
                        double s_min, double* out) const;
+    // The same with each fragment's arithmetic in single precision (the beam's constants rounded to float,
+    // the direction too), one ray at a time: what float lanes would cost in error, measured before they are
+    // built (volume_precision=float; slower here than the double lanes).
+    void radiance_each_single(const glm::dvec3* w, const double* s_max, int n, int samples, BeamCounters& counters,
+                              double s_min, double* out) const;
 
 private:
+    // radiance's body in the arithmetic T (double: radiance itself; float: radiance_each_single).
+    template <typename T>
+    double radiance_in(const glm::dvec3& w, double s_max, int samples, BeamCounters& counters, double s_min) const;
+
     // radiance_lanes' AVX2 body (called only where lanes_available()).
     void radiance_avx2(const glm::dvec3* w, const double* s_max, int n, int samples, BeamCounters& counters,
                        double s_min, double* out) const;

@@ -43,7 +43,7 @@ void evaluate(const Pass& pass, const std::vector<VolumeBeam>& beams, const Came
     const int W = g.width, H = g.height;
     const int bands = (H + kBandRows - 1) / kBandRows;
     const int samples = settings.samples;
-    const bool lanes = settings.lanes;
+    const bool lanes = settings.lanes, single = settings.single;
     std::vector<VolumeStats> per_band(static_cast<std::size_t>(bands));
     tbb::parallel_for(tbb::blocked_range<int>(0, bands, 1), [&](const tbb::blocked_range<int>& br) {
         for (int band = br.begin(); band != br.end(); ++band) {
@@ -77,7 +77,9 @@ void evaluate(const Pass& pass, const std::vector<VolumeBeam>& beams, const Came
                             values.resize(static_cast<std::size_t>(rays));
                             const glm::dvec3* dir = &pass.dir[first_ray];
                             const double* s_max = &pass.s_max[first_ray];
-                            if (lanes)
+                            if (single)
+                                vb.beam->radiance_each_single(dir, s_max, rays, samples, counters, kVolumeNearDistance, values.data());
+                            else if (lanes)
                                 vb.beam->radiance_lanes(dir, s_max, rays, samples, counters, kVolumeNearDistance, values.data());
                             else
                                 vb.beam->radiance_each(dir, s_max, rays, samples, counters, kVolumeNearDistance, values.data());

@@ -39,6 +39,7 @@ struct VolumeSettings {
     int subpixels = 2;     // rays per side of a refined pixel
     int edge_subpixels = 1;   // rays per side of a refined pixel whose sub-rays disagree (a hull's edge in it)
     bool lanes = true;     // the ray-beam integrals four rays at a time in AVX2 lanes where the CPU has them
+    bool single = false;   // each fragment's integral in single precision, one ray at a time (volume_precision)
     double cull = 0.0;     // beams whose mean radiance over their hull is below this fraction of the beams' 99th
                            // percentile are left out (accumulate.cpp, cull_faint_beams); 0: none
 };
