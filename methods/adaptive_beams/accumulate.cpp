@@ -273,12 +273,16 @@ void accumulate_receiver(const BeamSet& set, const Scene& scene, const ReceiverC
     std::vector<glm::uvec3> triangles;
     std::vector<float> values;
     // A plane receiver also takes the beams that leave its edge (each edge ends on it or on nothing): their
-    // edges are extended to its plane and the raster clips what falls outside it.
+    // edges are extended to its plane and the raster clips what falls outside it. That includes beams none of
+    // whose edges ends on it: at a corner of a water surface as wide as the floor, the light through the
+    // surface's last lattice row and column lands a hair outside the floor, and a beam spanning the corner
+    // (all three edges just outside) covered 2.5 x 2.5 bins of floor that stayed dark (nrmse 0.0089 on a
+    // weak `gaussian` caustic, all of it there).
     const glm::dvec3 plane_p = chart.point(0.5, 0.5), plane_n = chart.normal(0.5, 0.5);
     std::vector<std::uint8_t> deposited(nb, 0);
     for (std::size_t n = 0; n < nb; ++n) {
         const std::uint8_t e = set.ends[n];
-        const bool all = e & kAllOnReceiver, extend = chart.is_plane() && (e & kEndsOnReceiver) && (e & kReceiverOrNothing);
+        const bool all = e & kAllOnReceiver, extend = chart.is_plane() && (e & kReceiverOrNothing);
         if (!all && !extend) continue;
         const Beam& b = set.beams[n];
         const double sigma_t = medium_at(scene, b.medium).extinction();

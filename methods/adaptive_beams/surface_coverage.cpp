@@ -61,9 +61,10 @@ std::vector<std::uint8_t> deposit_plane_beams(const BeamSet& set, const Scene& s
         // receiver's edge, or where all end on it but the energy cut ended them short (their light there is
         // faint, and drawing it costs less than testing every pixel of their wide sections point by point): as
         // the receiver map carries them (accumulate_receiver).
-        const bool on_receiver = plane_receiver && (e & kEndsOnReceiver) && (e & kReceiverOrNothing);
+        // Beams none of whose edges ends on it too (a corner of the water: accumulate_receiver).
+        const bool on_receiver = plane_receiver && (e & kReceiverOrNothing);
         if (object < 0 && on_receiver) object = receiver;
-        if (object < 0 || !(e & kEndsOnDiffuse)) continue;
+        if (object < 0 || !((e & kEndsOnDiffuse) || on_receiver)) continue;
         const Object& plane = scene.objects[static_cast<std::size_t>(object)];
         if (plane.shape != ShapeType::Plane) continue;
         const Beam& b = set.beams[n];
