@@ -419,7 +419,8 @@ CausticOutput CausticMapping::render(const FrameGeometry& frame, const RenderReq
     int isolated_splats = 0;
     if (s_.elliptic) {
         face_ellipses_.resize(faces);
-        isolated_splats = build_elliptic_splats(landing_, s_.grid, static_cast<float>(radius_used_), face_ellipses_);
+        isolated_splats = build_elliptic_splats(landing_, s_.grid, elliptic_sigma(fold_resolution(s_)),
+                                                static_cast<float>(radius_used_), face_ellipses_);
     } else {
         isolated_splats = build_splats(landing_, s_.grid, s_.adaptive ? FootprintMode::Adaptive : FootprintMode::Fixed,
                                        static_cast<float>(radius_used_), face_splats_);

@@ -88,6 +88,9 @@ constexpr int kFoldMinIterations = 3;    // Newton's iterations the fold regime 
 // claim. render() decides it from the first focus alone (regime::RegimeParts::FocusOnly), claim_for() from
 // the full regime: the same depth ratio and tilt.
 Settings frame_settings(const FrameGeometry& frame, const Settings& s);
+// Whether `s` has the grid and map the fold regime was measured at (grid >= kFoldMinGrid, a map of exactly
+// kFoldMapPerGrid texels per grid spacing): its claim, and the splats' width (elliptic_splats.hpp).
+bool fold_resolution(const Settings& s);
 // The claim of the settings `s` on the frame, at the settings frame_settings() draws it with.
 AccuracyClaim claim_for(const FrameGeometry& frame, const Settings& s);
 MethodInfo caustic_mapping_info();

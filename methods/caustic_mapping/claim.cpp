@@ -24,12 +24,6 @@ bool fold_gates(const Settings& s) {
            s.estimator.iterations >= kFoldMinIterations;
 }
 
-// The grid and map the fold regime was measured at.
-bool fold_resolution(const Settings& s) {
-    const double map_per_grid = static_cast<double>(s.map) / std::max(1, s.grid);
-    return s.grid >= kFoldMinGrid && std::abs(map_per_grid - kFoldMapPerGrid) < 1e-9;
-}
-
 bool directional(const FrameGeometry& frame) {
     return frame.scene->lights.size() == 1 && frame.scene->lights[0].type == LightType::Directional;
 }
@@ -79,6 +73,11 @@ Settings refined_settings(const regime::WaterRegime& w, const Settings& s, bool 
 }
 
 }  // namespace
+
+bool fold_resolution(const Settings& s) {
+    const double map_per_grid = static_cast<double>(s.map) / std::max(1, s.grid);
+    return s.grid >= kFoldMinGrid && std::abs(map_per_grid - kFoldMapPerGrid) < 1e-9;
+}
 
 Settings frame_settings(const FrameGeometry& frame, const Settings& s) {
     if (!may_refine(s, directional(frame))) return s;   // no regime to compute

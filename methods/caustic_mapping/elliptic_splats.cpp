@@ -267,12 +267,12 @@ CAUSTICS_AVX2_CLONES void draw_rows(const Print& p, glm::dvec2 c, int j0, int j1
 
 }  // namespace
 
-int build_elliptic_splats(const std::vector<FaceSplat>& landing, int grid, float min_radius,
+int build_elliptic_splats(const std::vector<FaceSplat>& landing, int grid, float sigma, float min_radius,
                           std::vector<std::vector<EllipticSplat>>& per_face) {
     const int g = grid;
     const std::size_t faces = per_face.size();
     const float sigma0 = min_radius / kEllipticCutoff;
-    const float s2 = elliptic_sigma(grid) * elliptic_sigma(grid), o2 = sigma0 * sigma0;
+    const float s2 = sigma * sigma, o2 = sigma0 * sigma0;
     // Each face's splats in the order of the landed texels (row-major): each row's first slot per face
     // from a count first, so that the rows can then be built in parallel into their slots.
     std::vector<std::size_t> row_slot(static_cast<std::size_t>(g) * faces);

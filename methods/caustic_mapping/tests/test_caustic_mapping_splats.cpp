@@ -291,7 +291,7 @@ TEST(CausticMappingSplats, EllipticSplatsFollowTheirRule) {
     const float min_radius = 1.0f, sigma0 = min_radius / kEllipticCutoff;
     std::vector<std::vector<EllipticSplat>> got(2);
     std::vector<std::vector<Splat>> iso(2);
-    const int isolated = build_elliptic_splats(landing, g, min_radius, got);
+    const int isolated = build_elliptic_splats(landing, g, kEllipticSigma, min_radius, got);
     EXPECT_EQ(isolated, build_splats(landing, g, FootprintMode::Adaptive, min_radius, iso));
     EXPECT_GE(isolated, 1);   // the lone texels
     auto at = [&](int x, int y, int face) -> const FaceSplat* {
@@ -324,7 +324,7 @@ TEST(CausticMappingSplats, EllipticSplatsFollowTheirRule) {
             glm::vec2 jx, jy;
             glm::vec3 want;
             if (column(x, y, fs.face, 1, 0, jx) && column(x, y, fs.face, 0, 1, jy)) {
-                const float s2 = elliptic_sigma(g) * elliptic_sigma(g), o2 = sigma0 * sigma0;
+                const float s2 = kEllipticSigma * kEllipticSigma, o2 = sigma0 * sigma0;
                 want = {s2 * (jx.x * jx.x + jy.x * jy.x) + o2, s2 * (jx.x * jx.y + jy.x * jy.y), s2 * (jx.y * jx.y + jy.y * jy.y) + o2};
                 ++anisotropic;
             } else {
