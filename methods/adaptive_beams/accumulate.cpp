@@ -280,6 +280,7 @@ void accumulate_receiver(const BeamSet& set, const Scene& scene, const ReceiverC
     // weak `gaussian` caustic, all of it there).
     const glm::dvec3 plane_p = chart.point(0.5, 0.5), plane_n = chart.normal(0.5, 0.5);
     std::vector<std::uint8_t> deposited(nb, 0);
+    const double far_out = 16.0 * std::max(W, H);   // bins
     for (std::size_t n = 0; n < nb; ++n) {
         const std::uint8_t e = set.ends[n];
         const bool all = e & kAllOnReceiver, extend = chart.is_plane() && (e & kReceiverOrNothing);
@@ -294,13 +295,19 @@ void accumulate_receiver(const BeamSet& set, const Scene& scene, const ReceiverC
         // plane (the camera's coverage pass places them alike, surface_coverage.hpp).
         const PlaneEnd how = all && (!chart.is_plane() || ends_on_plane(b, plane_p, plane_n)) ? PlaneEnd::Own : PlaneEnd::Extend;
         for (int i = 0; i < 3; ++i) ok = edge_end_on_plane(b, i, plane_p, plane_n, how, ends[i], lengths[i]) && ok;
+        // An end carried far beyond the receiver (an edge nearly parallel to its plane) is not drawn here, as the
+        // camera's coverage pass does not draw one (far_out there): the raster's float coordinates stay exact,
+        // and a beam with an edge on the receiver falls to the point samples below.
+        double u[3], v[3];
+        for (int i = 0; i < 3 && ok; ++i) {
+            chart.coords(ends[i], u[i], v[i]);
+            ok = std::abs(u[i] * W) < far_out && std::abs(v[i] * H) < far_out;
+        }
         if (!ok) continue;
         deposited[n] = 1;
         const auto base = static_cast<unsigned>(positions.size());
         for (int i = 0; i < 3; ++i) {
-            double u = 0.0, v = 0.0;
-            chart.coords(ends[i], u, v);
-            positions.emplace_back(static_cast<float>(u * W), static_cast<float>(v * H));
+            positions.emplace_back(static_cast<float>(u[i] * W), static_cast<float>(v[i] * H));
             arriving += b.w[i] * std::exp(-sigma_t * lengths[i]) / 3.0;
         }
         triangles.emplace_back(base, base + 1, base + 2);

@@ -251,7 +251,7 @@ MethodInfo method_info() {
         {"volume_precision", ParamType::Enum, "double", 0, 0, {"double", "float"},
          "camera_volume: the arithmetic of each fragment's ray-beam integral (float: the beam's constants and the "
          "ray rounded to single precision and everything after in it, one ray at a time: what float lanes would "
-         "cost in error, measured before they are built; slower here than the double lanes)"},
+         "cost in error; there are no float lanes, and this one-ray path is slower than the double lanes)"},
         {"volume_cull", ParamType::Float, "0", 0.0, 1.0, {},
          "camera_volume: leave out the beams whose mean radiance over their hull (in-scattered power over the image "
          "pixels it spans times its squared distance) is below this fraction of the 99th percentile of the beams' "

@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <type_traits>
 
 namespace caustics::adaptive_beams {
 
@@ -86,6 +88,9 @@ double RayBeam::radiance_in(const glm::dvec3& w_in, double s_max, int samples, B
     const T ys_c[3] = {T(ys_[0]), T(ys_[1]), T(ys_[2])}, ye_c[3] = {T(ye_[0]), T(ye_[1]), T(ye_[2])};
     const T w_c[3] = {T(w_[0]), T(w_[1]), T(w_[2])};
     const T a_min = T(a_min_), k_c = T(k_), hg_a = T(hg_a_), hg_b = T(hg_b_), sigma_t = T(sigma_t_);
+    // The slack before a local ray's start: 1e-9 relative in double; in float, whose rounding step is 6e-8
+    // relative, 8 of its steps (1e-9 would be no slack at all).
+    const T start_slack = std::is_same_v<T, double> ? T(1e-9) : T(8) * std::numeric_limits<T>::epsilon();
     T total = T(0);
     for (int k = 0; k + 1 < nc; ++k) {
         const T sa = cand[k], sb = cand[k + 1];
@@ -108,7 +113,7 @@ double RayBeam::radiance_in(const glm::dvec3& w_in, double s_max, int samples, B
             // The local ray through the node (beam.cpp, local_density): its start, direction, weight.
             const T ys = b0 * ys_c[0] + b1 * ys_c[1] + b2 * ys_c[2];
             const T ye = b0 * ye_c[0] + b1 * ye_c[1] + b2 * ye_c[2];
-            if (y < ys - T(1e-9) * (T(1) + std::abs(ys)) || y > ye) continue;
+            if (y < ys - start_slack * (T(1) + std::abs(ys)) || y > ye) continue;
             const V3 dl = b0 * dp[0] + b1 * dp[1] + b2 * dp[2];
             const T stretch = std::sqrt(glm::dot(dl, dl));
             if (!(stretch > T(0))) continue;   // a degenerate section carries nothing (as the pointwise form)

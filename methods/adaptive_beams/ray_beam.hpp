@@ -58,8 +58,8 @@ public:
     void radiance_each(const glm::dvec3* w, const double* s_max, int n, int samples, BeamCounters& counters,
                        double s_min, double* out) const;
     // The same with each fragment's arithmetic in single precision (the beam's constants rounded to float,
-    // the direction too), one ray at a time: what float lanes would cost in error, measured before they are
-    // built (volume_precision=float; slower here than the double lanes).
+    // the direction too), one ray at a time: what float lanes would cost in error (volume_precision=float;
+    // there are no float lanes, and this path is slower than the double lanes).
     void radiance_each_single(const glm::dvec3* w, const double* s_max, int n, int samples, BeamCounters& counters,
                               double s_min, double* out) const;
 

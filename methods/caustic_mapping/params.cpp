@@ -80,8 +80,8 @@ MethodInfo caustic_mapping_info() {
         {"splat", ParamType::Enum, "elliptic", 0, 0, {"point", "gaussian", "adaptive", "elliptic"},
          "point: one texel per vertex (the paper); gaussian: normalised (flux-conserving) Gaussian footprint of a "
          "fixed radius; adaptive: isotropic Gaussian of 1.75 x the larger local spacing of neighbouring vertices' "
-         "landing points; elliptic: Gaussian whose covariance is the landing map's Jacobian times half a grid "
-         "spacing (follows the ray density in each direction: focused lines stay sharp across, no gaps along; "
+         "landing points; elliptic: Gaussian whose covariance is the landing map's Jacobian times 0.55 grid "
+         "spacings, 0.5 at the fold settings (follows the ray density in each direction: focused lines stay sharp across, no gaps along; "
          "adaptive and elliptic are not in the paper)"},
         {"splat_radius", ParamType::Float, "0", 0.0, 100.0, {},
          "Gaussian support in caustic-map texels (sigma = radius/3.5); 0: auto (gaussian: 2.5 grid spacings; "
